@@ -1,0 +1,39 @@
+"""The paper's Bayesian networks in pgmpy: exact inference on small grids, checks of the closed form.
+
+* :class:`SemanticGSLProblem` — one problem description (ontology, background, evidence, priors) with the
+  closed form through the core library (:meth:`SemanticGSLProblem.closed_form_posterior`);
+* :func:`build_network_a` — Network A, one discrete source variable S over the cells;
+* :func:`build_network_b` — Network B, binary S_i with the exactly-one constraint α ("chain" or "table");
+* :func:`exact_source_posterior`, :func:`exact_gas_posterior`, :func:`exact_information_gain` — exact
+  queries with pgmpy's VariableElimination.
+
+pgmpy is imported only here (``import psgsl_pgm`` stays light).
+"""
+
+from ._cpds import check_normalised
+from ._inference import (
+    exact_gas_posterior,
+    exact_information_gain,
+    exact_source_posterior,
+    network_evidence,
+    network_kind,
+)
+from ._network_a import build_network_a
+from ._network_b import MAX_TABLE_CELLS, build_network_b
+from ._problem import SemanticGSLProblem
+from ._underflow import MIN_EVIDENCE, log_evidence
+
+__all__ = [
+    "MAX_TABLE_CELLS",
+    "MIN_EVIDENCE",
+    "SemanticGSLProblem",
+    "build_network_a",
+    "build_network_b",
+    "check_normalised",
+    "exact_gas_posterior",
+    "exact_information_gain",
+    "exact_source_posterior",
+    "log_evidence",
+    "network_evidence",
+    "network_kind",
+]
