@@ -1,0 +1,38 @@
+"""psgsl_pgm — probabilistic semantic gas source localization (PSGSL).
+
+The closed-form estimator of Ojeda, Monroy & Gonzalez-Jimenez, *PSGSL: A Probabilistic Framework Integrating
+Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on full maps:
+
+* :func:`semantic_source_probability` — p(s_c | z) ∝ Σ_i p(o_ci | z_c)/p(o_ci) · p(o_ci | s_c)
+  (eq. ``prob-semantics-final``), with gas mixtures (Sec. "Probabilistic Gas Classification") and voxel
+  columns (Sec. "Voxelized Scene Representations");
+* :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. ``combined-conditionals``);
+* :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
+* :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
+  φ_O(p) (Sec. "Information Gain Optimization");
+* :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts.
+
+Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian networks),
+``psgsl_pgm.sim`` (simulated house), ``psgsl_pgm.olfaction`` (olfactory estimators p(s | g)).
+"""
+
+from ._beliefs import room_evidence, update_class_probs
+from ._fov import field_of_view, view_information_gain
+from ._fusion import fuse
+from ._infogain import semantic_information_gain
+from ._ontology import Ontology, kitchen_ontology
+from ._semantic import semantic_source_probability
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Ontology",
+    "field_of_view",
+    "fuse",
+    "kitchen_ontology",
+    "room_evidence",
+    "semantic_information_gain",
+    "semantic_source_probability",
+    "update_class_probs",
+    "view_information_gain",
+]
