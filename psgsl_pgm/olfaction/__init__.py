@@ -1,0 +1,48 @@
+"""Olfactory estimators p(s | g) of the gas source location from hit/miss readings (issue 5, part 1).
+
+Two estimators share one interface (:class:`OlfactoryEstimator`: ``update(position, hit, wind)``,
+``posterior``, ``reset()``) and one plume model (:class:`PlumeModel`: steady advection-diffusion on the
+occupancy grid with no-flux walls, absorbing outlets and the map's wind field, solved once with a sparse LU
+factorisation; Green's functions for all candidate sources from one adjoint solve per sensor cell):
+
+* :class:`GridInfotaxis` — Bayesian hit/miss posterior with Poisson encounters, P(hit | s) = 1 − exp(−κ G)
+  (Vergassola et al. 2007), tempered against correlated readings;
+* :class:`PMFSEstimator` — the PMFS family (the paper's baseline, Sec. "Validation"): a hit-probability map
+  with confidence compared with the hit map each candidate source would produce.
+
+Either posterior is the olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
+and is combined with the semantic term by :func:`psgsl_pgm.fuse`.
+
+The open-space analytic solution of Vergassola et al. (:func:`vergassola_concentration`) validates the grid
+model.
+"""
+
+from ._analytic import (
+    correlation_length,
+    vergassola_concentration,
+    vergassola_encounter_rate,
+    vergassola_encounter_scale,
+)
+from ._base import Observation, OlfactoryEstimator
+from ._grid import GridGeometry
+from ._hitmap import HitProbabilityMap
+from ._infotaxis import GridInfotaxis
+from ._operator import advection_diffusion_operator, bernoulli
+from ._plume import PlumeModel
+from ._pmfs import PMFSEstimator
+
+__all__ = [
+    "GridGeometry",
+    "GridInfotaxis",
+    "HitProbabilityMap",
+    "Observation",
+    "OlfactoryEstimator",
+    "PMFSEstimator",
+    "PlumeModel",
+    "advection_diffusion_operator",
+    "bernoulli",
+    "correlation_length",
+    "vergassola_concentration",
+    "vergassola_encounter_rate",
+    "vergassola_encounter_scale",
+]

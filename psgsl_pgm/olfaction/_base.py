@@ -1,0 +1,257 @@
+"""Common interface of the olfactory estimators p(s | g): posterior in log space over all map cells."""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import entr, logsumexp
+
+from ._plume import PlumeModel
+
+__all__ = ["Observation", "OlfactoryEstimator"]
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One olfactory reading at a robot stop.
+
+    Attributes
+    ----------
+    position : tuple of float
+        Sensor (x, y) in metres.
+    cell : tuple of int
+        Grid cell (row, col) of the sensor.
+    hit : bool
+        Binary gas detection.
+    wind : tuple of float or None
+        Anemometer (u_x, u_y) in m/s, if given.
+    """
+
+    position: tuple[float, float]
+    cell: tuple[int, int]
+    hit: bool
+    wind: tuple[float, float] | None
+
+
+def _as_hit(hit) -> bool:
+    if isinstance(hit, (bool, np.bool_)):
+        return bool(hit)
+    if isinstance(hit, (int, np.integer)) and hit in (0, 1):
+        return bool(hit)
+    raise TypeError(f"hit must be a bool (or 0/1), got {type(hit).__name__} {hit!r}")
+
+
+def _as_wind(wind):
+    if wind is None:
+        return None
+    if isinstance(wind, (str, bytes)):
+        raise TypeError(f"wind must be a (u_x, u_y) pair in m/s or None, got {type(wind).__name__}")
+    w = np.asarray(wind)
+    if w.dtype == object or not np.issubdtype(w.dtype, np.number) or np.iscomplexobj(w):
+        raise TypeError(f"wind must be a (u_x, u_y) pair of real numbers in m/s, got dtype {w.dtype}")
+    if w.shape != (2,):
+        raise ValueError(f"wind must be a (u_x, u_y) pair in m/s, got shape {w.shape}")
+    w = w.astype(np.float64)
+    if not np.isfinite(w).all():
+        raise ValueError(f"wind must be finite, got {tuple(w)}")
+    return (float(w[0]), float(w[1]))
+
+
+class OlfactoryEstimator(abc.ABC):
+    """Posterior p(s | g) over the cells of a map, updated one reading at a time.
+
+    The posterior covers every cell of the (H, W) map, is exactly zero on occupied cells, sums to one and is
+    kept internally as a log posterior (log-likelihood accumulation, ``logsumexp`` normalisation). It is the
+    olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z), to be fused
+    with the semantic term by :func:`psgsl_pgm.fuse`.
+
+    Subclasses implement :meth:`_propose` (the unnormalised log posterior after one more reading, without
+    changing state) and :meth:`_accept` (commit it); :meth:`update` rejects a reading that would leave no cell
+    with positive probability (ValueError, state unchanged), so the posterior never holds NaN.
+
+    Parameters
+    ----------
+    model : PlumeModel
+        The plume model of the map (shared between estimators to share its factorisation and cache).
+    prior : (H, W) array_like of float, optional
+        Non-negative prior p(s) (normalised here; zeroed on occupied cells). Default: uniform over free cells.
+    """
+
+    def __init__(self, model: PlumeModel, *, prior=None):
+        if not isinstance(model, PlumeModel):
+            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+        self.model = model
+        self.geometry = model.geometry
+        free = self.geometry.free.ravel()
+        if prior is None:
+            log_prior = np.where(free, 0.0, -np.inf)
+        else:
+            if isinstance(prior, (str, bytes)):
+                raise TypeError(f"prior must be a numeric (H, W) array, got {type(prior).__name__}")
+            p = np.asarray(prior)
+            if p.dtype == object or not np.issubdtype(p.dtype, np.number) or np.iscomplexobj(p):
+                raise TypeError(f"prior must be a real numeric (H, W) array, got dtype {p.dtype}")
+            if p.shape != self.geometry.shape:
+                raise ValueError(f"prior must have the map's shape {self.geometry.shape}, got {p.shape}")
+            p = p.astype(np.float64).ravel()
+            if not np.isfinite(p).all() or (p < 0).any():
+                raise ValueError("prior must be finite and non-negative")
+            p = np.where(free, p, 0.0)
+            if not (p.sum() > 0):
+                raise ValueError("prior must put positive mass on at least one free cell")
+            with np.errstate(divide="ignore"):
+                log_prior = np.log(p)
+        self._log_prior = log_prior - logsumexp(log_prior)
+        self._log_prior.flags.writeable = False
+        self._centres = self.geometry.cell_centres().reshape(-1, 2)
+        self.reset()
+
+    # --- state ----------------------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Forget all readings: the posterior returns to the prior."""
+        self._observations: list[Observation] = []
+        self._reset_state()
+        self._set_log_posterior(self._log_prior.copy())
+
+    @abc.abstractmethod
+    def _reset_state(self) -> None:
+        """Clear subclass state."""
+
+    @abc.abstractmethod
+    def _propose(self, obs: Observation):
+        """Return (unnormalised flat log posterior, payload) after ``obs``; must not change state."""
+
+    @abc.abstractmethod
+    def _accept(self, obs: Observation, payload) -> None:
+        """Commit the state change computed by :meth:`_propose`."""
+
+    def _set_log_posterior(self, log_post: np.ndarray) -> None:
+        log_post = log_post.copy()
+        log_post[~self.geometry.free.ravel()] = -np.inf
+        log_post -= logsumexp(log_post)  # normalise in log space
+        log_post.flags.writeable = False
+        self._log_post = log_post
+        post = np.exp(log_post)
+        post.flags.writeable = False
+        self._post = post
+
+    def update(self, position, hit, wind=None) -> np.ndarray:
+        """Assimilate one reading and return the new posterior.
+
+        Parameters
+        ----------
+        position : (2,) array_like of float
+            Sensor (x, y) in metres; must fall in a free cell of the map.
+        hit : bool
+            Whether the gas sensor detected gas (binary hit/miss).
+        wind : (2,) array_like of float, optional
+            Anemometer reading (u_x, u_y) in m/s at the sensor.
+
+        Returns
+        -------
+        posterior : (H, W) ndarray of float64
+            p(s | g) after this reading (read-only view; see :attr:`posterior`).
+        """
+        cell = self.model.cell_of(position)
+        obs = Observation(
+            position=tuple(float(v) for v in np.asarray(position, dtype=np.float64)),
+            cell=cell,
+            hit=_as_hit(hit),
+            wind=_as_wind(wind),
+        )
+        log_target, payload = self._propose(obs)
+        finite = np.isfinite(log_target) & self.geometry.free.ravel()
+        if np.isnan(log_target).any():
+            raise FloatingPointError("internal error: NaN in the log posterior")  # never expected
+        if not finite.any():
+            raise ValueError(
+                f"the reading {'hit' if obs.hit else 'miss'} at {obs.position} has zero likelihood for every "
+                "candidate source under the model (use a positive false_hit_rate); the reading was not applied"
+            )
+        self._accept(obs, payload)
+        self._observations.append(obs)
+        self._set_log_posterior(log_target)
+        return self.posterior
+
+    # --- read-out -------------------------------------------------------------------------------------------
+    @property
+    def posterior(self) -> np.ndarray:
+        """(H, W) float64 p(s | g): sums to 1, zero on occupied cells (read-only)."""
+        return self._post.reshape(self.geometry.shape)
+
+    @property
+    def log_posterior(self) -> np.ndarray:
+        """(H, W) float64 log p(s | g), −inf on occupied cells (read-only)."""
+        return self._log_post.reshape(self.geometry.shape)
+
+    @property
+    def prior(self) -> np.ndarray:
+        """(H, W) float64 prior p(s) (normalised)."""
+        return np.exp(self._log_prior).reshape(self.geometry.shape)
+
+    @property
+    def observations(self) -> tuple[Observation, ...]:
+        """Readings assimilated since the last :meth:`reset`."""
+        return tuple(self._observations)
+
+    @property
+    def n_observations(self) -> int:
+        """Number of readings assimilated since the last :meth:`reset`."""
+        return len(self._observations)
+
+    def map_cell(self) -> tuple[int, int]:
+        """(row, col) of the most probable source cell (first one on ties)."""
+        return tuple(int(v) for v in np.unravel_index(int(np.argmax(self._log_post)), self.geometry.shape))
+
+    def map_position(self) -> tuple[float, float]:
+        """Map-frame (x, y) centre of the most probable source cell."""
+        return self.geometry.centre_of(self.map_cell())
+
+    def expected_position(self) -> tuple[float, float]:
+        """Posterior mean E[s] (x, y) in metres (the paper's reported source estimate)."""
+        m = self._post @ self._centres
+        return (float(m[0]), float(m[1]))
+
+    def position_spread(self) -> float:
+        """Posterior standard deviation sqrt(E|s − E[s]|²) in metres (the paper's error bars)."""
+        d = self._centres - np.asarray(self.expected_position())
+        return float(np.sqrt(self._post @ np.einsum("ij,ij->i", d, d)))
+
+    def entropy(self) -> float:
+        """H(S) of the posterior in nats."""
+        return float(entr(self._post).sum())
+
+    # --- information gain -----------------------------------------------------------------------------------
+    def _hit_likelihood_rows(self, flat_cells: np.ndarray) -> np.ndarray:
+        """(K, H*W) P(hit at x_k | s) used for predictions; default: the plume model's 1 − exp(−κ G)."""
+        return -np.expm1(-self.model.encounter_scale * self.model.green_rows(flat_cells))
+
+    def information_gain(self, positions) -> np.ndarray:
+        """Expected information about S from one hit/miss reading at each candidate position, I(S; hit_x).
+
+        I(S; hit_x) = H_b(Σ_s p(s) P_x(s)) − Σ_s p(s) H_b(P_x(s)) with the binary entropy H_b and
+        P_x(s) = P(hit at x | s) the estimator's predictive hit probability: the olfactory term φ_G(p) of
+        φ(p) = φ_G(p) + φ_O(p) (Sec. "Information Gain Optimization"), in nats.
+
+        Parameters
+        ----------
+        positions : (n, 2) array_like of float
+            Candidate sensor positions (x, y) in metres (free cells).
+
+        Returns
+        -------
+        gain : (n,) ndarray of float64
+            Non-negative, at most ln 2.
+        """
+        pos = np.asarray(positions, dtype=np.float64)
+        if pos.ndim != 2 or pos.shape[1] != 2:
+            raise ValueError(f"positions must have shape (n, 2) (x, y in metres), got {pos.shape}")
+        w = self.geometry.shape[1]
+        flat = np.array([r * w + c for r, c in (self.model.cell_of(p, "positions[i]") for p in pos)], np.int64)
+        p_hit = self._hit_likelihood_rows(flat)  # (n, H*W)
+        p_bar = p_hit @ self._post  # predictive P(hit at x)
+        h_bin = entr(p_hit) + entr(1.0 - p_hit)  # H_b(P_x(s))
+        gain = entr(p_bar) + entr(1.0 - p_bar) - h_bin @ self._post  # I = H_b(p̄) − E_s[H_b]
+        return np.maximum(gain, 0.0)  # round-off can give −1e-17
