@@ -79,9 +79,10 @@ def _check_pair(model, problem) -> str:
 
 
 def _query(infer: VariableElimination, variables, evidence, order, what: str):
-    """One VariableElimination query with a fixed order, floating-point warnings kept out of the result."""
+    """One VariableElimination query; floating-point warnings are replaced by :func:`check_result`."""
+    order = order if isinstance(order, str) else list(order)
     with np.errstate(invalid="ignore", divide="ignore", under="ignore"):
-        factor = infer.query(list(variables), evidence=evidence, elimination_order=list(order), joint=True,
+        factor = infer.query(list(variables), evidence=evidence, elimination_order=order, joint=True,
                              show_progress=False)
     check_result(factor.values, what)
     return factor
@@ -126,12 +127,13 @@ def _aligned(factor, variables) -> np.ndarray:
     return np.transpose(factor.values, [factor.variables.index(v) for v in variables])
 
 
-def exact_source_posterior(model: DiscreteBayesianNetwork, problem: SemanticGSLProblem) -> np.ndarray:
+def exact_source_posterior(
+    model: DiscreteBayesianNetwork, problem: SemanticGSLProblem, *, elimination_order: str = "auto"
+) -> np.ndarray:
     """p(s_c | all evidence) by exact variable elimination in pgmpy, over cells in cell order.
 
     Network A: one query of S. Network B: one query per S_i (its marginal p(S_i = yes | evidence, α));
-    never a joint over all S_i. Elimination orders are fixed in advance (linear-time chain messages for
-    the counter encoding) so pgmpy does not search heuristics per query.
+    never a joint over all S_i.
 
     Parameters
     ----------
@@ -139,6 +141,13 @@ def exact_source_posterior(model: DiscreteBayesianNetwork, problem: SemanticGSLP
         Built by :func:`build_network_a` / :func:`build_network_b` from ``problem`` (or loaded from their
         exported files).
     problem : SemanticGSLProblem
+    elimination_order : {"auto", "fixed", "greedy"}, default "auto"
+        ``"fixed"``: orders computed here in advance — all O_c first, then (Network B, chain) forward and
+        backward messages along the counters, so no factor has more than C_{i−1}, C_i, S_i, γ in scope;
+        for the table encoding O_c then S_i (each step touches the 2^n-entry α factor).
+        ``"greedy"``: pgmpy's default tensor contraction (opt_einsum's greedy path, searched per query).
+        ``"auto"``: ``"greedy"`` for the table encoding (it contracts the α table one S_i at a time, far
+        cheaper than any elimination through the full table), ``"fixed"`` otherwise.
 
     Returns
     -------
@@ -161,18 +170,23 @@ def exact_source_posterior(model: DiscreteBayesianNetwork, problem: SemanticGSLP
     (True, True)
     """
     kind = _check_pair(model, problem)
+    if elimination_order not in ("auto", "fixed", "greedy"):
+        raise ValueError(f"elimination_order must be 'auto', 'fixed' or 'greedy', got {elimination_order!r}")
+    greedy = elimination_order == "greedy" or (elimination_order == "auto" and kind == "B-table")
     check_scale(problem, kind[0])
     infer = VariableElimination(model)
     evidence = network_evidence(model)
     if kind == "A":
-        order = _object_nodes(problem) + ([GAMMA] if problem.m > 1 else [])
+        order = "greedy" if greedy else _object_nodes(problem) + ([GAMMA] if problem.m > 1 else [])
         factor = _query(infer, [SOURCE], evidence, order, "S")
         index = {cell: i for i, cell in enumerate(_states(factor, SOURCE))}
         return factor.values[[index[c] for c in problem.cell_names]]
     posterior = np.empty(problem.n)
     for t, cell in enumerate(problem.cell_names):  # one query per target S_t
         s_t = source_node(cell)
-        if kind == "B-chain":
+        if greedy:
+            order = "greedy"
+        elif kind == "B-chain":
             order = _chain_order(problem, t)
         else:
             order = _object_nodes(problem) + [source_node(c) for c in problem.cell_names if c != cell]
@@ -213,7 +227,8 @@ def _mutual_information(joint: np.ndarray) -> float:
     py = joint.sum(axis=0, keepdims=True)
     positive = joint > 0
     ratio = np.where(positive, joint, 1.0) / np.where(positive, px * py, 1.0)
-    return float(np.sum(joint * np.log(ratio)))  # Σ p(s,o) log p(s,o)/(p(s)p(o)) = H(S) − H(S | O_n)
+    mi = float(np.sum(joint * np.log(ratio)))  # Σ p(s,o) log p(s,o)/(p(s)p(o)) = H(S) − H(S | O_n)
+    return max(mi, 0.0)  # I ≥ 0; a negative value is round-off of order eps (terms cancel when I = 0)
 
 
 def exact_information_gain(model: DiscreteBayesianNetwork, problem: SemanticGSLProblem, *, cells=None) -> np.ndarray:

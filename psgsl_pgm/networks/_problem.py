@@ -382,32 +382,33 @@ class SemanticGSLProblem:
             rows[empty, rng.integers(shape_[-1], size=empty.size)] = rng.uniform(0.5, 1.0, size=empty.size)
             return rows.reshape(shape_)
 
-        lik = sparse((m, k))
-        lik /= lik.sum(axis=1, keepdims=True)
-        beta = rng.dirichlet(np.ones(k))
-        beta = np.maximum(beta, 1e-3)
-        beta /= beta.sum()
-        counts = rng.integers(0, max_observations + 1, size=n)
-        obs_cells = np.repeat(np.arange(n), counts)
-        obs = sparse((obs_cells.size, k), floor=0.05)
-        truth = rng.integers(k, size=n)  # one class every observation of a cell allows: p(z_c) > 0
-        obs[np.arange(obs_cells.size), truth[obs_cells]] = rng.uniform(0.5, 1.0, size=obs_cells.size)
-        olf = sparse((1, n), floor=0.01)[0]
-        prior = np.full(n, 1.0 / n) if uniform_prior else rng.uniform(0.05, 1.0, size=n)
-        prior /= prior.sum()
-        gas_prior = rng.dirichlet(np.ones(m) * 2.0)
-        zeta = rng.uniform(0.05, 1.0, size=(n_gas_observations if m > 1 else 0, m))
-        while True:
+        for _ in range(100):  # redraw (from the same rng) when zeros make the evidence impossible
+            lik = sparse((m, k))
+            lik /= lik.sum(axis=1, keepdims=True)
+            beta = np.maximum(rng.dirichlet(np.ones(k)), 1e-3)
+            beta /= beta.sum()
+            counts = rng.integers(0, max_observations + 1, size=n)
+            obs_cells = np.repeat(np.arange(n), counts)
+            obs = sparse((obs_cells.size, k), floor=0.05)
+            truth = rng.integers(k, size=n)  # one class every observation of a cell allows: p(z_c) > 0
+            obs[np.arange(obs_cells.size), truth[obs_cells]] = rng.uniform(0.5, 1.0, size=obs_cells.size)
+            olf = sparse((1, n), floor=0.01)[0]
+            prior = np.full(n, 1.0 / n) if uniform_prior else rng.uniform(0.05, 1.0, size=n)
+            prior /= prior.sum()
+            gas_prior = rng.dirichlet(np.ones(m) * 2.0)
+            zeta = rng.uniform(0.05, 1.0, size=(n_gas_observations if m > 1 else 0, m))
             try:
                 return cls(
                     lik, beta, cells=n, observation_cells=obs_cells, observation_likelihoods=obs,
                     olfactory_likelihood=olf, source_prior=prior, gas_prior=gas_prior, gas_observations=zeta,
                     shape=shape,
                 )
-            except ValueError as exc:  # evidence of probability zero: make the olfaction uninformative
-                if "probability zero" not in str(exc) or np.all(olf == 1.0):
+            except ValueError as exc:
+                if "probability zero" not in str(exc):
                     raise
-                olf = np.ones(n)
+        raise ValueError(
+            f"could not draw a problem with possible evidence in 100 attempts (zero_fraction={zero_fraction})"
+        )
 
     def __repr__(self) -> str:
         return (
