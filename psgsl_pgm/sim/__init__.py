@@ -1,0 +1,76 @@
+"""A simulated house for the validation experiment (paper Sec. "Validation"), without GADEN/Unity/Voxeland.
+
+Lightweight, seeded, vectorised substitutes for the lab's tool chain:
+
+* environments — :class:`GridMap`, ROS ``map_server`` maps (:func:`load_ros_map`), room-category maps
+  (:func:`load_room_map`), object lists (:func:`load_objects`), and the embedded :func:`default_house`;
+* wind — potential flow between inlet and outlet windows with a slow divergence-free perturbation
+  (:func:`potential_flow`, :func:`make_wind`), or a GADEN CFD export (:func:`read_gaden_wind_csv`);
+* gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensor and anemometer models;
+* vision — camera field of view, a detector with distance-dependent detection and class confusion
+  (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
+* :func:`make_world` — all of it on one clock for the experiment.
+
+Modelling choice: walls block wind, gas, the camera and the robot; furniture is low, so wind, gas and the
+camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`).
+"""
+
+from ._camera import Camera, Frame, take_frame
+from ._cfd import read_gaden_wind_csv
+from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
+from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
+from ._filaments import FilamentModel, FilamentParams, read_gaden_config
+from ._gridmap import GridMap
+from ._house import House, default_house, segment_mask
+from ._los import LineOfSightCache, cells_clear
+from ._objects import SceneObject, box_footprint, load_objects, save_objects
+from ._plot import plot_house
+from ._rosmap import load_ros_map, save_ros_map
+from ._roommap import load_room_map, save_room_map
+from ._semantic_map import SemanticMap
+from ._sensors import Anemometer, GasReading, GasSensor
+from ._wind import WindField, WindSequence, make_wind, potential_flow
+from ._world import World, make_world
+
+__all__ = [
+    "Anemometer",
+    "Camera",
+    "DEFAULT_CONFUSION_GROUPS",
+    "DetectorModel",
+    "FilamentModel",
+    "FilamentParams",
+    "Frame",
+    "GasReading",
+    "GasSensor",
+    "GridMap",
+    "HOUSE_CLASSES",
+    "HOUSE_ROOMS",
+    "House",
+    "LineOfSightCache",
+    "NOTHING",
+    "OTHER",
+    "SceneObject",
+    "SemanticMap",
+    "WindField",
+    "WindSequence",
+    "World",
+    "box_footprint",
+    "cells_clear",
+    "default_house",
+    "load_objects",
+    "load_ros_map",
+    "load_room_map",
+    "make_wind",
+    "make_world",
+    "match_names",
+    "plot_house",
+    "potential_flow",
+    "read_gaden_config",
+    "read_gaden_wind_csv",
+    "reindex",
+    "save_objects",
+    "save_ros_map",
+    "save_room_map",
+    "segment_mask",
+    "take_frame",
+]

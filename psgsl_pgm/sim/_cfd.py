@@ -1,0 +1,110 @@
+"""Reader for CFD wind exports in GADEN's CSV form (ParaView "Points" + "U" columns), snapped to a grid.
+
+GADEN's preprocessing reads OpenFOAM results exported from ParaView as CSV with a header naming the columns,
+among them ``"U:0","U:1","U:2"`` (velocity, m/s) and ``"Points:0","Points:1","Points:2"`` (position, m), in
+any order and possibly with others (``"p"``, ``"k"``, ...). Here the points within a horizontal slab around a
+height are kept and every free cell of the grid takes the (u, v) of the nearest of them.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._gridmap import GridMap
+from ._wind import WindField
+
+__all__ = ["read_gaden_wind_csv"]
+
+_COLUMNS = ("U:0", "U:1", "U:2", "Points:0", "Points:1", "Points:2")
+
+
+def read_gaden_wind_csv(path, *, like: GridMap, height: float, slab: float | None = None,
+                        max_distance: float | None = None) -> WindField:
+    """Read a GADEN/ParaView CFD CSV and snap its horizontal wind at ``height`` onto a grid.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV with a header row; the six columns ``U:0..2``, ``Points:0..2`` are required (quotes optional).
+    like : GridMap, keyword-only
+        Grid (and map frame) to snap to.
+    height : float, keyword-only
+        z of the horizontal slice, metres.
+    slab : float, optional, keyword-only
+        Points with |z − height| <= slab / 2 are used (default: one grid cell, ``like.resolution``).
+    max_distance : float, optional, keyword-only
+        Free cells farther than this from every slab point get zero wind (default: 2 cells).
+
+    Returns
+    -------
+    WindField
+        Cell velocities (u, v) = (U:0, U:1); zero in walls. No face velocities.
+
+    Raises
+    ------
+    FileNotFoundError
+    ValueError
+        Missing columns, non-numeric entries, no point in the slab — naming the file, and the line/column.
+    """
+    p = Path(path)
+    if not isinstance(like, GridMap):
+        raise TypeError(f"like must be a GridMap, got {type(like).__name__}")
+    if not p.is_file():
+        raise FileNotFoundError(f"{p}: no such file")
+    if not np.isfinite(height):
+        raise ValueError(f"height must be a finite number of metres, got {height!r}")
+    slab = like.resolution if slab is None else float(slab)
+    max_distance = 2 * like.resolution if max_distance is None else float(max_distance)
+    if not (slab > 0 and max_distance > 0):
+        raise ValueError(f"slab and max_distance must be positive, got {slab!r}, {max_distance!r}")
+    with p.open(newline="") as fh:
+        reader = csv.reader(fh)
+        try:
+            header = [h.strip().strip('"') for h in next(reader)]
+        except StopIteration:
+            raise ValueError(f"{p}: empty file, expected a header with columns {list(_COLUMNS)}") from None
+        missing = [c for c in _COLUMNS if c not in header]
+        if missing:
+            raise ValueError(f"{p}: missing column(s) {missing}; the header has {header}")
+        cols = [header.index(c) for c in _COLUMNS]
+        rows = []
+        for line, row in enumerate(reader, start=2):
+            if not row or all(not x.strip() for x in row):
+                continue
+            try:
+                rows.append([float(row[i]) for i in cols])
+            except IndexError:
+                raise ValueError(f"{p}: line {line} has {len(row)} fields, expected {len(header)}") from None
+            except ValueError:
+                bad = next(c for c, i in zip(_COLUMNS, cols) if not _is_float(row[i]))
+                raise ValueError(f"{p}: line {line}, column '{bad}': not a number: {row[header.index(bad)]!r}") from None
+    data = np.array(rows, dtype=np.float64).reshape(-1, 6)
+    if not np.all(np.isfinite(data)):
+        line = int(np.argwhere(~np.isfinite(data))[0, 0]) + 2
+        raise ValueError(f"{p}: non-finite value near data row {line - 1}")
+    in_slab = np.abs(data[:, 5] - height) <= slab / 2
+    if not in_slab.any():
+        z = data[:, 5]
+        rng = f"[{z.min():g}, {z.max():g}]" if z.size else "(no rows)"
+        raise ValueError(f"{p}: no point within {slab / 2:g} m of height {height:g} m; the points' z span {rng}")
+    pts = data[in_slab]
+    tree = cKDTree(pts[:, 3:5])
+    centres = like.cell_centres()[like.free]
+    dist, idx = tree.query(centres)
+    vel = np.zeros(like.shape + (2,))
+    uv = pts[idx, :2]
+    uv[dist > max_distance] = 0.0
+    vel[like.free] = uv
+    return WindField(like, vel)
+
+
+def _is_float(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False

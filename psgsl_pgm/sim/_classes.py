@@ -1,0 +1,76 @@
+"""The object classes and room categories of the simulated house — the one place they are listed.
+
+Class names are COCO names as in the lab's ontology (``oven``, ``potted plant``, ...), plus ``countertop`` and
+the catch-all ``other`` (free floor, walls, unlisted things). Room names follow the lab's room-category maps
+(``Kitchen``, ``LivingRoom``, ...); :func:`match_names` aligns them with another spelling
+(``"living room"`` -> ``"LivingRoom"``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["HOUSE_CLASSES", "HOUSE_ROOMS", "OTHER", "match_names", "reindex"]
+
+#: Catch-all class for cells that hold no listed object.
+OTHER = "other"
+
+#: Object classes of the default house, in the order used by its class maps.
+HOUSE_CLASSES: tuple[str, ...] = (
+    "oven",
+    "microwave",
+    "toaster",
+    "refrigerator",
+    "sink",
+    "countertop",
+    "toilet",
+    "bed",
+    "couch",
+    "tv",
+    "dining table",
+    "chair",
+    "potted plant",
+    OTHER,
+)
+
+#: Room categories of the default house, in the order of its room labels.
+HOUSE_ROOMS: tuple[str, ...] = ("Kitchen", "Bathroom", "Bedroom", "LivingRoom", "Hallway")
+
+
+def _key(name: str) -> str:
+    return "".join(ch for ch in str(name).lower() if ch.isalnum())
+
+
+def match_names(names, targets) -> np.ndarray:
+    """Index of each name in ``targets``, ignoring case, spaces and punctuation; -1 where absent.
+
+    Examples
+    --------
+    >>> match_names(["LivingRoom", "Garage"], ["kitchen", "living room"])
+    array([ 1, -1])
+    """
+    lookup = {}
+    for i, t in enumerate(targets):
+        lookup.setdefault(_key(t), i)
+    return np.array([lookup.get(_key(n), -1) for n in names], dtype=np.int64)
+
+
+def reindex(labels, names, targets, *, missing: int = -1) -> np.ndarray:
+    """Relabel integer ``labels`` (indices into ``names``, -1 = none) as indices into ``targets``.
+
+    Names absent from ``targets`` become ``missing``.
+
+    Examples
+    --------
+    >>> reindex([0, 1, -1], ["Kitchen", "Hallway"], ["hallway", "kitchen"])
+    array([ 1,  0, -1])
+    """
+    lab = np.asarray(labels)
+    if not np.issubdtype(lab.dtype, np.integer):
+        raise TypeError(f"labels must be integer indices, got dtype {lab.dtype}")
+    idx = match_names(names, targets)
+    idx = np.where(idx < 0, missing, idx)
+    lut = np.append(idx, missing)  # label -1 -> last entry
+    if lab.size and (lab.min() < -1 or lab.max() >= len(idx)):
+        raise ValueError(f"labels must lie in [-1, {len(idx) - 1}], got [{lab.min()}, {lab.max()}]")
+    return lut[lab]
