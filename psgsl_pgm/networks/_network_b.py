@@ -30,7 +30,7 @@ MAX_TABLE_CELLS = 20
 def source_bernoulli(problem: SemanticGSLProblem) -> np.ndarray:
     """(n,) p(S_i = yes) = π_i / (π_i + max π): the odds p_i / (1 − p_i) = π_i / max π.
 
-    On a single-source configuration s_c, Π_i p(S_i) = p_c Π_{i≠c} (1 − p_i) = [Π_i (1 − p_i)] · π_c / max π,
+    On a single-source configuration s_c, Π_i p(S_i) = p_c Π_{i≠c} (1 − p_i) = [Π_i (1 − p_i)] π_c / max π,
     i.e. ∝ π_c: the binary priors reproduce the source prior once α restricts S to one source.
     """
     pi = problem.source_prior
