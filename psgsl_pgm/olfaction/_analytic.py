@@ -4,7 +4,8 @@ without gradients*, Nature 445, 406–409 (Methods): the 2-D analytic solution u
 For a source emitting R particles/s at r0 in unbounded 2-D space with uniform wind w, eddy diffusivity D and
 lifetime τ, the mean concentration is
 
-    c(r | r0) = R / (2π D) · exp(w·(r − r0) / (2D)) · K0(|r − r0| / λ),     λ = sqrt(D τ / (1 + |w|² τ / (4D))),
+    c(r | r0) = R / (2π D) · exp(w·(r − r0) / (2D)) · K0(|r − r0| / λ),
+    λ = sqrt(D τ / (1 + |w|² τ / (4D))),
 
 and a sensor of radius a ≪ λ encounters particles at the rate R(r | r0) = 2π D c / ln(λ/a), i.e.
 

@@ -60,11 +60,19 @@ class PlumeModel:
         Free cells that absorb gas (windows/doors to the outside): c = 0 there.
     diffusivity : float, default 0.05
         Eddy diffusivity D in m²/s.
-    lifetime : float, default 60.0
-        Particle lifetime τ in s (Vergassola's finite lifetime; also makes a closed room well posed).
-    encounter_scale : float, default 1.0
+    lifetime : float, default 20.0
+        Particle lifetime τ in s (Vergassola's finite lifetime: for a thresholded hit sensor, the time a puff
+        stays above the detection threshold; it also makes a closed room well posed).
+    encounter_scale : float, default 0.4
         κ in m²/s: the expected number of sensor encounters in one sample is κ G(x | s); see
-        :func:`vergassola_encounter_scale` for κ = R Δt 2π D / ln(λ/a) from physical quantities.
+        :func:`vergassola_encounter_scale` for κ = R Δt 2π D / ln(λ/a) from physical quantities and
+        :func:`fit_encounter_scale` for a maximum-likelihood fit to readings around a known source.
+
+    Notes
+    -----
+    The defaults are illustrative, not calibrated: with D = 0.05 m²/s, τ = 20 s and κ = 0.4 m²/s, a source in
+    open space with a 0.1 m/s wind gives P(hit) ≈ 0.56 one metre downwind and ≈ 0.11 one metre upwind
+    (h = 0.1 m). Calibrate D, τ and κ against the gas simulator before drawing conclusions.
     boundary : {"wall", "open"}, default "wall"
         The map border: no-flux wall, or absorbing free space.
     scheme : {"exponential", "upwind"}, default "exponential"
@@ -95,8 +103,8 @@ class PlumeModel:
         wind=None,
         outlets=None,
         diffusivity: float = 0.05,
-        lifetime: float = 60.0,
-        encounter_scale: float = 1.0,
+        lifetime: float = 20.0,
+        encounter_scale: float = 0.4,
         boundary: str = "wall",
         scheme: str = "exponential",
         cache_size: int = 1024,

@@ -20,7 +20,7 @@ class PMFSEstimator(OlfactoryEstimator):
     candidate source s by how well the hit map it would produce, h_c(s), agrees with the estimate ĥ_c, each
     cell weighted by its confidence (PMFS ``Simulations::weightedDifference``):
 
-        p(s | g) ∝ p(s) · Π_c [1 − γ · conf_c · |ĥ_c − h_c(s)|],                                   (PMFS score)
+        p(s | g) ∝ p(s) · Π_c [1 − γ · conf_c · |ĥ_c − h_c(s)|],            (PMFS score)
 
     computed as a sum of ``log1p`` terms. Every factor lies in [1 − γ, 1], so no single cell can veto a
     source: the score is a bounded pseudo-likelihood, robust to correlated readings by construction (no
@@ -29,8 +29,8 @@ class PMFSEstimator(OlfactoryEstimator):
 
     Simplifications with respect to PMFS, and why:
 
-    * PMFS obtains h_c(s) by simulating filaments from (quadtree regions of) candidate sources in the
-      estimated wind and counting their visits per cell. We use the expected value of that frequency under the
+    * PMFS obtains h_c(s) by simulating filaments from (quadtree regions of) candidate sources in
+      the estimated wind and counting their visits per cell. We use the expected value of that frequency under the
       Poisson-encounter advection-diffusion model shared with :class:`GridInfotaxis`,
       h_c(s) = 1 − exp(−κ G(c | s)), which is deterministic and, through the adjoint Green's function,
       available for *all* candidates s at once (one solve per compared cell, cached).
@@ -68,11 +68,16 @@ class PMFSEstimator(OlfactoryEstimator):
     Examples
     --------
     >>> import numpy as np
-    >>> occ = np.zeros((10, 12), bool)
-    >>> est = PMFSEstimator(occ, resolution=0.25, diffusivity=0.05, lifetime=20.0)
-    >>> p = est.update((1.4, 1.1), True, wind=(0.0, 0.0))
-    >>> bool(abs(p.sum() - 1) < 1e-12), est.map_cell()
-    (True, (4, 5))
+    >>> occ = np.zeros((12, 16), bool)
+    >>> wind = np.zeros((12, 16, 2)); wind[..., 0] = 0.3
+    >>> est = PMFSEstimator(occ, resolution=0.25, wind=wind, boundary="open", diffusivity=0.02)
+    >>> stops = [(x, y) for x in np.arange(0.6, 4.0, 0.5) for y in np.arange(0.35, 3.0, 0.5)]
+    >>> hits = est.model.sample_hits(stops, (1.1, 1.6), rng=1)   # synthetic readings, source at (1.1, 1.6)
+    >>> for x, g in zip(stops, hits):
+    ...     p = est.update(x, g)
+    >>> x, y = est.expected_position()
+    >>> bool(abs(p.sum() - 1) < 1e-12), bool(np.hypot(x - 1.1, y - 1.6) < 0.5)
+    (True, True)
     """
 
     def __init__(

@@ -10,12 +10,14 @@ RES = 0.2  # metres per cell of the test house
 
 
 def potential_flow(occupancy, inlet, outlet, *, resolution, mean_speed):
-    """Cell-centred potential flow u = −∇φ with ∇²φ = 0 on free cells, φ = 1 on ``inlet``, φ = 0 on ``outlet``.
+    """Cell-centred potential flow u = −∇φ, ∇²φ = 0 on free cells, φ = 1 on ``inlet``, 0 on ``outlet``.
 
     Walls and the map border are no-flux (Neumann). Face velocities −(φ_j − φ_i)/h are averaged onto cells
     and the field is scaled so that the mean speed over free cells is ``mean_speed``.
     """
     free = ~occupancy
+    if (occupancy & (inlet | outlet)).any():
+        raise ValueError("inlet and outlet cells must be free")
     h, w = occupancy.shape
     n = h * w
     idx = np.arange(n).reshape(h, w)
