@@ -211,16 +211,17 @@ class FilamentModel:
             n = steps[long_]
             a, b = p0[long_], p1[long_]
             prev_p, prev_c = a, c0[long_]
-            bad = np.zeros(long_.size, bool)
+            bad = np.zeros(long_.size, bool)  # met a wall before leaving the map
+            left = np.zeros(long_.size, bool)  # left the map (through a free border cell)
             for k in range(1, int(n.max()) + 1):
                 frac = np.minimum(k / n, 1.0)[:, None]
                 p = a + (b - a) * frac
                 c = self.grid.world_to_cell(p)
-                inside = self.grid.contains(c)
-                bad |= inside & self._blocked_short(prev_p, p, prev_c, c)
-                bad |= ~inside & (k <= n)  # left the map mid-way: handled as leaving (see step)
+                active = ~bad & ~left
+                bad |= active & self._blocked_short(prev_p, p, prev_c, c)
+                left |= ~bad & ~self.grid.contains(c)
                 prev_p, prev_c = p, c
-            blocked[long_] = bad & self.grid.contains(c1[long_])
+            blocked[long_] = bad
         return blocked, c1
 
     def release(self, count: int) -> None:

@@ -90,6 +90,39 @@ class House:
         object.__setattr__(self, "inlet", masks[0])
         object.__setattr__(self, "outlet", masks[1])
 
+    @classmethod
+    def from_maps(cls, grid: GridMap, room_labels, room_names, *, inlets, outlets, window_width: float = 0.15,
+                  objects=(), classes=HOUSE_CLASSES) -> "House":
+        """Assemble a house from loaded maps, opening the windows given as wall segments.
+
+        Parameters
+        ----------
+        grid : GridMap
+            Walls (e.g. :func:`load_ros_map` of a walls-only map, possibly coarsened).
+        room_labels, room_names
+            As returned by :func:`load_room_map` (in ``grid``'s frame).
+        inlets, outlets : sequence of ((x0, y0), (x1, y1)), keyword-only
+            Window segments in metres; cells within ``window_width`` of a segment become free window cells.
+        window_width : float, keyword-only
+        objects : sequence of SceneObject, keyword-only
+        classes : tuple of str, keyword-only
+        """
+        inlet = np.zeros(grid.shape, bool)
+        outlet = np.zeros(grid.shape, bool)
+        for mask, segs, name in ((inlet, inlets, "inlets"), (outlet, outlets, "outlets")):
+            for seg in segs:
+                try:
+                    p0, p1 = seg
+                except (TypeError, ValueError):
+                    raise ValueError(f"{name} must be a list of ((x0, y0), (x1, y1)) segments, got {seg!r}") from None
+                mask |= segment_mask(grid, p0, p1, width=window_width)
+            if not mask.any():
+                raise ValueError(f"{name}: no cell lies within {window_width} m of the given segments")
+        if (inlet & outlet).any():
+            raise ValueError("inlet and outlet windows overlap")
+        opened = grid.with_occupancy(grid.occupancy & ~inlet & ~outlet)
+        return cls(opened, room_labels, room_names, tuple(objects), inlet, outlet, tuple(classes))
+
     # --- derived maps (cached) ------------------------------------------------------------------------------
     def _cached(self, key, make):
         if key not in self._cache:
