@@ -48,10 +48,9 @@ def kitchen_problem() -> SemanticGSLProblem:
 def grid_problem() -> SemanticGSLProblem:
     """A 3×3 kitchen grid (cells ``r{row}c{col}``) with camera detections, room evidence and a plume.
 
-    Objects: oven at r0c0, microwave at r0c2, refrigerator at r2c0, countertop at r1c1 and r2c2, the rest
-    "other". Cells r0c0, r0c2, r1c1, r2c2 are seen by the 0.7/0.1 detector (r1c1 twice); every cell of the
-    top row also has room evidence "kitchen wall" favouring appliances, p(z | o) = (1, 1, 1, 0.5, 0.5);
-    r1c0, r1c2, r2c0, r2c1 are unobserved. Olfaction p(g | c) = exp(−d²/2), d the distance in cells to
+    Detections by the 0.7/0.1 detector: oven at r0c0, microwave at r0c2, countertop at r1c1 (twice) and at
+    r2c2; every cell of the top row also has room evidence "kitchen wall" favouring appliances,
+    p(z | o) = (1, 1, 1, 0.5, 0.5); r1c0, r1c2, r2c0, r2c1 are unobserved. Olfaction p(g | c) = exp(−d²/2), d the distance in cells to
     r0c1; uniform source prior; β uniform.
     """
     classes = KITCHEN_CLASSES
