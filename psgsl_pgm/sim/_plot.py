@@ -50,7 +50,8 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
         ax.imshow(obj, origin="lower", extent=ext, cmap="tab20", interpolation="nearest", vmin=0,
                   vmax=len(house.classes) - 1)
     if concentration is not None:
-        c = np.ma.masked_less_equal(np.asarray(concentration), 0)
+        c = np.asarray(concentration, dtype=np.float64)
+        c = np.ma.masked_where(~np.isfinite(c) | (c <= 0), c)  # nan = not computed (strided field)
         ax.imshow(c, origin="lower", extent=ext, cmap="magma_r", alpha=0.7, interpolation="nearest")
     ax.imshow(np.ma.masked_where(~g.occupancy, g.occupancy), origin="lower", extent=ext,
               cmap=ListedColormap(["black"]), interpolation="nearest")

@@ -82,17 +82,15 @@ def test_plot_house_runs():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    h = default_house(0)
-    wind = potential_flow(h.grid, h.inlet, h.outlet)
-    ax = plot_house_call(h, wind)
-    assert ax.get_xlim() == (0.0, 10.0) and ax.get_ylim() == (0.0, 12.0)
-    plt.close("all")
-
-
-def plot_house_call(h, wind):
     from psgsl_pgm.sim import plot_house
 
-    return plot_house(h, wind=wind, concentration=np.ones(h.shape), source=(7.5, 0.5))
+    h = default_house(0)
+    conc = np.full(h.shape, np.nan)
+    conc[::2, ::2] = 1.0
+    ax = plot_house(h, wind=potential_flow(h.grid, h.inlet, h.outlet), concentration=conc, source=(7.5, 0.5))
+    assert ax.get_xlim() == (0.0, 10.0) and ax.get_ylim() == (0.0, 12.0)
+    assert len(ax.images) >= 5  # rooms, objects, gas, walls, inlet, outlet
+    plt.close("all")
 
 
 # ---- potential flow ------------------------------------------------------------------------------------------
