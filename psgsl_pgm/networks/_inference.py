@@ -1,4 +1,4 @@
-"""Exact queries on Networks A and B with pgmpy's VariableElimination and fixed elimination orders."""
+"""Exact queries on Networks A and B with pgmpy's VariableElimination (its contraction, or fixed orders)."""
 
 from __future__ import annotations
 
@@ -142,12 +142,13 @@ def exact_source_posterior(
         exported files).
     problem : SemanticGSLProblem
     elimination_order : {"auto", "fixed", "greedy"}, default "auto"
-        ``"fixed"``: orders computed here in advance — all O_c first, then (Network B, chain) forward and
-        backward messages along the counters, so no factor has more than C_{i−1}, C_i, S_i, γ in scope;
-        for the table encoding O_c then S_i (each step touches the 2^n-entry α factor).
-        ``"greedy"``: pgmpy's default tensor contraction (opt_einsum's greedy path, searched per query).
-        ``"auto"``: ``"greedy"`` for the table encoding (it contracts the α table one S_i at a time, far
-        cheaper than any elimination through the full table), ``"fixed"`` otherwise.
+        ``"greedy"``: pgmpy 1.1's default — one tensor contraction of the pruned network (opt_einsum, greedy
+        path). ``"fixed"``: classic variable elimination with orders computed here — all O_c first, then
+        (Network B, chain) forward and backward messages along the counters, so no factor holds more than
+        C_{i−1}, C_i, S_i, γ; for the table encoding O_c then S_i (each step touches the 2^n-entry α
+        factor). ``"auto"`` = ``"greedy"``: measured faster in every case of ``benchmarks/bench_networks.py``
+        (pgmpy's per-query network pruning dominates either way; the list path also re-checks the pruned
+        model and multiplies pgmpy factors in Python). Both give the same posterior to round-off.
 
     Returns
     -------
@@ -172,7 +173,7 @@ def exact_source_posterior(
     kind = _check_pair(model, problem)
     if elimination_order not in ("auto", "fixed", "greedy"):
         raise ValueError(f"elimination_order must be 'auto', 'fixed' or 'greedy', got {elimination_order!r}")
-    greedy = elimination_order == "greedy" or (elimination_order == "auto" and kind == "B-table")
+    greedy = elimination_order != "fixed"
     check_scale(problem, kind[0])
     infer = VariableElimination(model)
     evidence = network_evidence(model)
@@ -197,7 +198,7 @@ def exact_source_posterior(
 
 
 def exact_gas_posterior(model: DiscreteBayesianNetwork, problem: SemanticGSLProblem) -> np.ndarray:
-    """p(γ | all evidence) by exact variable elimination (Network A or B), in gas order.
+    """p(γ | all evidence) by exact inference in pgmpy (Network A or B; pgmpy's contraction), in gas order.
 
     For a single-gas problem this is ``array([1.0])``.
 
@@ -210,13 +211,7 @@ def exact_gas_posterior(model: DiscreteBayesianNetwork, problem: SemanticGSLProb
         return np.ones(1)
     check_scale(problem, kind[0])
     infer = VariableElimination(model)
-    if kind == "A":
-        order = _object_nodes(problem) + [SOURCE]
-    elif kind == "B-chain":
-        order = _chain_order(problem, 0)[:-1] + [source_node(problem.cell_names[0])]
-    else:
-        order = _object_nodes(problem) + [source_node(c) for c in problem.cell_names]
-    factor = _query(infer, [GAMMA], network_evidence(model), order, GAMMA)
+    factor = _query(infer, [GAMMA], network_evidence(model), "greedy", GAMMA)
     index = {gas: i for i, gas in enumerate(_states(factor, GAMMA))}
     return factor.values[[index[g] for g in problem.gas_names]]
 
@@ -232,7 +227,7 @@ def _mutual_information(joint: np.ndarray) -> float:
 
 
 def exact_information_gain(model: DiscreteBayesianNetwork, problem: SemanticGSLProblem, *, cells=None) -> np.ndarray:
-    """I(S; O_n | evidence) in nats, from the exact joint p(S, O_n | evidence) of Network A.
+    """I(S; O_n | evidence) in nats, from the exact joint p(S, O_n | evidence) of Network A (pgmpy).
 
     I(S; O_n) = H(S) − Σ_i p(o_ni | ev) H(S | o_ni, ev) (Sec. "Information Gain Optimization"), with every
     entropy taken under the exact posterior given all evidence (z, g, ζ).
@@ -261,8 +256,7 @@ def exact_information_gain(model: DiscreteBayesianNetwork, problem: SemanticGSLP
     gains = np.empty(idx.size)
     for out, c in enumerate(idx):  # one joint query (S, O_c) per cell
         o_node = object_node(problem.cell_names[c])
-        order = _object_nodes(problem, exclude={problem.cell_names[c]}) + ([GAMMA] if problem.m > 1 else [])
-        factor = _query(infer, [SOURCE, o_node], evidence, order, f"(S, {o_node})")
+        factor = _query(infer, [SOURCE, o_node], evidence, "greedy", f"(S, {o_node})")
         joint = _aligned(factor, [SOURCE, o_node])
         gains[out] = _mutual_information(joint / joint.sum())
     return gains
