@@ -53,7 +53,8 @@ def problem(n, seed=0, k=4, m=1):
 
 def bench_a(sizes, repeats):
     print("\nNetwork A: p(S | z, g) — pgmpy VariableElimination vs closed form")
-    print(f"{'n':>5} {'build s':>9} {'fixed s':>9} {'greedy s':>9} {'closed s':>10} {'fixed/closed':>13} {'rel err':>9}")
+    print(f"{'n':>5} {'build s':>9} {'fixed s':>9} {'greedy s':>9} {'closed s':>10} {'fixed/closed':>13} "
+          f"{'rel err':>9}")
     for n in sizes:
         p = problem(n)
         t_build, model = best_of(lambda: build_network_a(p), 1)

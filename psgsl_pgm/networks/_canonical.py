@@ -50,8 +50,8 @@ def grid_problem() -> SemanticGSLProblem:
 
     Detections by the 0.7/0.1 detector: oven at r0c0, microwave at r0c2, countertop at r1c1 (twice) and at
     r2c2; every cell of the top row also has room evidence "kitchen wall" favouring appliances,
-    p(z | o) = (1, 1, 1, 0.5, 0.5); r1c0, r1c2, r2c0, r2c1 are unobserved. Olfaction p(g | c) = exp(−d²/2), d the distance in cells to
-    r0c1; uniform source prior; β uniform.
+    p(z | o) = (1, 1, 1, 0.5, 0.5); r1c0, r1c2, r2c0, r2c1 are unobserved. Olfaction p(g | c) = exp(−d²/2),
+    d the distance in cells to r0c1; uniform source prior; β uniform.
     """
     classes = KITCHEN_CLASSES
     cells = tuple(f"r{r}c{c}" for r in range(3) for c in range(3))
