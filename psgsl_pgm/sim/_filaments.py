@@ -163,7 +163,8 @@ class FilamentModel:
         self.outlet = outlet
         self._walls = grid.occupancy
         self._rng = np.random.default_rng(seed)
-        self._los = LineOfSightCache(self._walls, capacity=256)
+        # one int8 table per cached sensor cell: at most ~32 MB of tables on large maps
+        self._los = LineOfSightCache(self._walls, capacity=int(np.clip(2**25 // self._walls.size, 8, 256)))
         self.time = 0.0
         self._step = 0
         self.positions = np.zeros((0, 2))
