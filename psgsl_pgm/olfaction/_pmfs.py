@@ -136,6 +136,14 @@ class PMFSEstimator(OlfactoryEstimator):
         self._slot: dict[int, int] = {}
         n = self.geometry.shape[0] * self.geometry.shape[1]
         self._pred = np.empty((16, n))  # rows h_c(s) = 1 − exp(−κ G(c | s)) for the compared cells
+        self._h_used = np.empty(0)  # ĥ_c and conf_c behind the current score
+        self._conf_used = np.empty(0)
+        self._score = np.zeros(n)  # Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|]
+
+    def _log_factors(self, rows: np.ndarray, h_obs: np.ndarray, conf: np.ndarray) -> np.ndarray:
+        """Σ over the given compared cells of log[1 − γ conf_c |ĥ_c − h_c(s)|], for every s."""
+        factor = self.discrimination * conf[:, None] * np.abs(h_obs[:, None] - self._pred[rows])
+        return np.log1p(-factor).sum(axis=0)  # log Π_c [1 − γ conf_c |ĥ_c − h_c(s)|]  (PMFS score)
 
     def _propose(self, obs: Observation):
         r, c = obs.cell
@@ -150,16 +158,23 @@ class PMFSEstimator(OlfactoryEstimator):
                 self._pred = np.concatenate([self._pred, np.empty_like(self._pred)])  # grow (amortised)
             self._pred[k] = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0])  # h_c(s)
         cells = self._cells + [flat] if new else self._cells
-        kk = len(cells)
         h_obs = hitmap.hit_probability.ravel()[cells]  # ĥ_c
         conf = hitmap.confidence.ravel()[cells]  # conf_c
-        factor = self.discrimination * conf[:, None] * np.abs(h_obs[:, None] - self._pred[:kk])
-        score = np.log1p(-factor).sum(axis=0)  # log Π_c [1 − γ conf_c |ĥ_c − h_c(s)|]
-        return self._log_prior + score, (hitmap, new, flat)
+        # only the compared cells within the reading's kernel change: update the score by their difference
+        changed = np.flatnonzero((h_obs[:k] != self._h_used) | (conf[:k] != self._conf_used))
+        score = self._score.copy()
+        if changed.size:
+            score -= self._log_factors(changed, self._h_used[changed], self._conf_used[changed])
+            score += self._log_factors(changed, h_obs[changed], conf[changed])
+        if new:
+            score += self._log_factors(np.array([k]), h_obs[k:], conf[k:])
+        return self._log_prior + score, (hitmap, new, flat, score, h_obs, conf)
 
     def _accept(self, obs: Observation, payload) -> None:
-        hitmap, new, flat = payload
+        hitmap, new, flat, score, h_obs, conf = payload
         self._hitmap = hitmap
+        self._score = score
+        self._h_used, self._conf_used = h_obs, conf
         if new:
             self._slot[flat] = len(self._cells)
             self._cells.append(flat)

@@ -203,21 +203,22 @@ def test_hit_map_is_a_kernel_weighted_beta_posterior_blocked_by_walls():
 
 
 def test_pmfs_posterior_equals_the_weighted_difference_score():
+    """After every reading (the score is updated incrementally), against the product recomputed from scratch."""
     occ, wind, outlets = _map(12)
     est = PMFSEstimator(occ, resolution=H, wind=wind, outlets=outlets, discrimination=0.8, diffusivity=0.03,
                         lifetime=8.0)
     g_all = _dense_green(est.model)
-    pos, cells, hits, winds = _readings(occ, 20, 13)
-    for p, h, w in zip(pos, hits, winds):
+    pos, cells, hits, winds = _readings(occ, 60, 13)
+    for i, (p, h, w) in enumerate(zip(pos, hits, winds)):
         est.update(p, h, w)
-    flat = np.unique(cells[:, 0] * occ.shape[1] + cells[:, 1])
-    assert sorted(flat.tolist()) == sorted((est.compared_cells @ [occ.shape[1], 1]).tolist())
-    h_obs = est.hit_map.hit_probability.ravel()[flat]
-    conf = est.hit_map.confidence.ravel()[flat]
-    h_src = 1 - np.exp(-est.model.encounter_scale * g_all[flat])  # (K, n) predicted hit maps
-    score = np.prod(1 - 0.8 * conf[:, None] * np.abs(h_obs[:, None] - h_src), axis=0)  # PMFS weightedDifference
-    score[occ.ravel()] = 0
-    np.testing.assert_allclose(est.posterior.ravel(), score / score.sum(), rtol=1e-10)
+        flat = np.unique(cells[: i + 1, 0] * occ.shape[1] + cells[: i + 1, 1])
+        assert sorted(flat.tolist()) == sorted((est.compared_cells @ [occ.shape[1], 1]).tolist())
+        h_obs = est.hit_map.hit_probability.ravel()[flat]
+        conf = est.hit_map.confidence.ravel()[flat]
+        h_src = 1 - np.exp(-est.model.encounter_scale * g_all[flat])  # (K, n) predicted hit maps
+        score = np.prod(1 - 0.8 * conf[:, None] * np.abs(h_obs[:, None] - h_src), axis=0)  # weightedDifference
+        score[occ.ravel()] = 0
+        np.testing.assert_allclose(est.posterior.ravel(), score / score.sum(), rtol=1e-10, atol=1e-300)
 
 
 def test_pmfs_uses_the_model_wind_when_the_reading_has_none():
