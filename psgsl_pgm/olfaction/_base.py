@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import entr, logsumexp
 
+from ._grid import as_wind_vector
 from ._plume import PlumeModel
 
 __all__ = ["Observation", "OlfactoryEstimator"]
@@ -41,22 +42,6 @@ def _as_hit(hit) -> bool:
     if isinstance(hit, (int, np.integer)) and hit in (0, 1):
         return bool(hit)
     raise TypeError(f"hit must be a bool (or 0/1), got {type(hit).__name__} {hit!r}")
-
-
-def _as_wind(wind):
-    if wind is None:
-        return None
-    if isinstance(wind, (str, bytes)):
-        raise TypeError(f"wind must be a (u_x, u_y) pair in m/s or None, got {type(wind).__name__}")
-    w = np.asarray(wind)
-    if w.dtype == object or not np.issubdtype(w.dtype, np.number) or np.iscomplexobj(w):
-        raise TypeError(f"wind must be a (u_x, u_y) pair of real numbers in m/s, got dtype {w.dtype}")
-    if w.shape != (2,):
-        raise ValueError(f"wind must be a (u_x, u_y) pair in m/s, got shape {w.shape}")
-    w = w.astype(np.float64)
-    if not np.isfinite(w).all():
-        raise ValueError(f"wind must be finite, got {tuple(w)}")
-    return (float(w[0]), float(w[1]))
 
 
 class OlfactoryEstimator(abc.ABC):
@@ -159,7 +144,7 @@ class OlfactoryEstimator(abc.ABC):
             position=tuple(float(v) for v in np.asarray(position, dtype=np.float64)),
             cell=cell,
             hit=_as_hit(hit),
-            wind=_as_wind(wind),
+            wind=as_wind_vector(wind),
         )
         log_target, payload = self._propose(obs)
         finite = np.isfinite(log_target) & self.geometry.free.ravel()
@@ -232,8 +217,9 @@ class OlfactoryEstimator(abc.ABC):
         """Expected information about S from one hit/miss reading at each candidate position, I(S; hit_x).
 
         I(S; hit_x) = H_b(Σ_s p(s) P_x(s)) − Σ_s p(s) H_b(P_x(s)) with the binary entropy H_b and
-        P_x(s) = P(hit at x | s) the estimator's predictive hit probability: the olfactory term φ_G(p) of
-        φ(p) = φ_G(p) + φ_O(p) (Sec. "Information Gain Optimization"), in nats.
+        P_x(s) = P(hit at x | s) the estimator's predictive hit probability (untempered; with false hits
+        for :class:`GridInfotaxis`): the olfactory term φ_G(p) of φ(p) = φ_G(p) + φ_O(p)
+        (Sec. "Information Gain Optimization"), in nats.
 
         Parameters
         ----------

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["GridGeometry", "as_wind_field"]
+__all__ = ["GridGeometry", "as_wind_field", "as_wind_vector"]
 
 
 def _as_mask(x, name: str, shape=None) -> np.ndarray:
@@ -32,10 +32,13 @@ def _as_mask(x, name: str, shape=None) -> np.ndarray:
 def as_wind_field(wind, shape, free: np.ndarray, name: str = "wind") -> np.ndarray:
     """Validated (H, W, 2) float64 wind field (u_x, u_y) in m/s; ``None`` means still air.
 
+    An object with a ``.velocity`` (H, W, 2) array (e.g. ``psgsl_pgm.sim.WindField``) is accepted too.
     Values on occupied cells are ignored (set to 0): walls carry no flow, and a wind solver may leave
     anything there. Free cells must be finite.
     """
     h, w = shape
+    if wind is not None and not isinstance(wind, np.ndarray) and hasattr(wind, "velocity"):
+        wind = wind.velocity
     if wind is None:
         out = np.zeros((h, w, 2))
         out.flags.writeable = False
@@ -54,6 +57,23 @@ def as_wind_field(wind, shape, free: np.ndarray, name: str = "wind") -> np.ndarr
         raise ValueError(f"{name} must be finite on free cells, got {out[r, c]} at cell {(int(r), int(c))}")
     out.flags.writeable = False
     return out
+
+
+def as_wind_vector(wind, name: str = "wind"):
+    """``None`` or a validated (u_x, u_y) tuple of floats in m/s."""
+    if wind is None:
+        return None
+    if isinstance(wind, (str, bytes)):
+        raise TypeError(f"{name} must be a (u_x, u_y) pair in m/s or None, got {type(wind).__name__}")
+    w = np.asarray(wind)
+    if w.dtype == object or not np.issubdtype(w.dtype, np.number) or np.iscomplexobj(w):
+        raise TypeError(f"{name} must be a (u_x, u_y) pair of real numbers in m/s, got dtype {w.dtype}")
+    if w.shape != (2,):
+        raise ValueError(f"{name} must be a (u_x, u_y) pair in m/s, got shape {w.shape}")
+    w = w.astype(np.float64)
+    if not np.isfinite(w).all():
+        raise ValueError(f"{name} must be finite, got {tuple(w)}")
+    return (float(w[0]), float(w[1]))
 
 
 class GridGeometry:
@@ -153,6 +173,19 @@ class GridGeometry:
         if self.occupancy[row, col]:
             raise ValueError(f"{name} {tuple(p)} falls in occupied cell {(row, col)}; a sensor must be in free space")
         return row, col
+
+    def check_cell(self, cell, name: str = "cell") -> tuple[int, int]:
+        """Validated (row, col) of a free cell of the map."""
+        try:
+            r, c = (int(v) for v in cell)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be a (row, col) pair of integers, got {cell!r}") from None
+        h, w = self.shape
+        if not (0 <= r < h and 0 <= c < w):
+            raise ValueError(f"{name} {(r, c)} lies outside the {h} x {w} grid")
+        if self.occupancy[r, c]:
+            raise ValueError(f"{name} {(r, c)} is occupied")
+        return r, c
 
     def centre_of(self, cell) -> tuple[float, float]:
         """Map-frame centre (x, y) of cell (row, col)."""

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from ._grid import GridGeometry
+from ._grid import GridGeometry, as_wind_vector
 
 __all__ = ["HitProbabilityMap"]
 
@@ -159,7 +159,8 @@ class HitProbabilityMap:
         wind : (2,) array_like of float, optional
             Wind (u_x, u_y) in m/s orienting the kernel; isotropic when ``None`` or zero.
         """
-        r, c = cell
+        r, c = self.geometry.check_cell(cell)
+        wind = as_wind_vector(wind)
         w_cols = self.geometry.shape[1]
         src = r * w_cols + c
         speed = 0.0 if wind is None else float(np.hypot(wind[0], wind[1]))
@@ -183,6 +184,8 @@ class HitProbabilityMap:
 
     def observe(self, cell, hit: bool, wind=None) -> None:
         """Add one reading at ``cell`` (row, col) spread by :meth:`kernel`."""
+        if not isinstance(hit, (bool, np.bool_)):
+            raise TypeError(f"hit must be a bool, got {type(hit).__name__} {hit!r}")
         w = self.kernel(cell, wind)
         self._weight += w
         if hit:

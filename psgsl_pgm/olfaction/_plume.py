@@ -54,8 +54,8 @@ class PlumeModel:
     origin : (2,) array_like of float, default (0, 0)
         Map-frame (x, y) of the lower-left corner of cell (0, 0).
     wind : (H, W, 2) ndarray of float, optional
-        Cell-centred wind (u_x, u_y) in m/s (e.g. the simulated potential flow); ``None`` = still air.
-        Ignored on occupied cells.
+        Cell-centred wind (u_x, u_y) in m/s (e.g. the simulated potential flow), or an object with such a
+        ``.velocity`` array (``sim.WindField``); ``None`` = still air. Ignored on occupied cells.
     outlets : (H, W) ndarray of bool, optional
         Free cells that absorb gas (windows/doors to the outside): c = 0 there.
     diffusivity : float, default 0.05
@@ -77,8 +77,9 @@ class PlumeModel:
         The map border: no-flux wall, or absorbing free space.
     scheme : {"exponential", "upwind"}, default "exponential"
         Face-flux scheme of the advection term (see :func:`advection_diffusion_operator`).
-    cache_size : int, default 1024
-        Number of sensor cells whose Green's-function rows are kept (each H·W float64).
+    cache_size : int, default 512
+        Number of sensor cells whose Green's-function rows are kept (least recently used first out; each
+        row is H·W float64, so 512 rows of the 120 x 100 default house take 49 MB).
 
     Examples
     --------
@@ -107,7 +108,7 @@ class PlumeModel:
         encounter_scale: float = 0.4,
         boundary: str = "wall",
         scheme: str = "exponential",
-        cache_size: int = 1024,
+        cache_size: int = 512,
     ):
         self.geometry = GridGeometry(occupancy, resolution=resolution, origin=origin, outlets=outlets)
         self.wind = as_wind_field(wind, self.geometry.shape, self.geometry.free)

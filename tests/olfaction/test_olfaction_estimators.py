@@ -249,6 +249,8 @@ def test_from_grid_map_duck_types_and_from_model_shares_the_cache():
         b.update(x, h)
         p.update(x, h)
     np.testing.assert_array_equal(a.posterior, b.posterior)
+    c = GridInfotaxis.from_grid_map(gm, SimpleNamespace(velocity=wind), **kw)  # a sim.WindField-like object
+    np.testing.assert_array_equal(c.model.wind, a.model.wind)
     shared = PlumeModel(occ, resolution=H, wind=wind, outlets=outlets, diffusivity=0.03, lifetime=8.0)
     e1, e2 = GridInfotaxis.from_model(shared), PMFSEstimator.from_model(shared)
     for x, h in zip(pos - [1.0, -2.0], hits):
@@ -323,3 +325,12 @@ def test_bad_inputs_raise_with_clear_messages():
         with pytest.raises(ValueError, match=r"positions must have shape \(n, 2\)"):
             est.information_gain((0.05, 0.05))
         assert est.n_observations == 0  # nothing was applied
+    hm = HitProbabilityMap(GridGeometry(occ, resolution=0.1))
+    with pytest.raises(ValueError, match=r"cell \(1, 1\) is occupied"):
+        hm.observe((1, 1), True)
+    with pytest.raises(ValueError, match="outside the 4 x 5 grid"):
+        hm.kernel((4, 0))
+    with pytest.raises(TypeError, match="hit must be a bool"):
+        hm.observe((0, 0), 1.0)
+    with pytest.raises(ValueError, match="prior_hit must lie in"):
+        HitProbabilityMap(GridGeometry(occ, resolution=0.1), prior_hit=1.0)
