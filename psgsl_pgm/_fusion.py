@@ -59,7 +59,8 @@ def fuse(*posteriors, prior=None):
         check_sums(np.sum(a, dtype=np.float64), f"posteriors[{j}] (over all cells)", a.dtype)
     out_dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
 
-    with np.errstate(divide="ignore"):
+    # log 0 = −inf is intended; −inf − (−inf) on cells outside every support is masked below
+    with np.errstate(divide="ignore", invalid="ignore"):
         log_p = np.sum([np.log(a, dtype=np.float64) for a in arrays], axis=0)  # Σ_j log p(s|e_j)
         if prior is not None:
             pr = as_float_array(prior, "prior", dtype=np.float64)

@@ -161,11 +161,8 @@ def test_voxel_column_sum():
     np.testing.assert_allclose(voxel_exact.ravel(), problem.closed_form_posterior(), rtol=RTOL, atol=0)
 
 
-@pytest.mark.xfail(strict=True, raises=RuntimeWarning,
-                   reason="core fuse(): log(p) − log(prior) is evaluated before masking, so a zero-prior cell "
-                          "emits 'invalid value encountered in subtract' (an error under the test settings)")
 def test_closed_form_with_zero_prior_cells():
-    """Zero-prior cells: the closed form must equal the networks (0 there). Known core issue, see reason."""
+    """Zero-prior cells: the closed form must equal the networks (0 there)."""
     base = SemanticGSLProblem.random(np.random.default_rng(22), 5, 3)
     prior = base.source_prior.copy()
     prior[2] = 0.0
