@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import k0
 
+from ._grid import positive as _positive
+
 __all__ = [
     "correlation_length",
     "vergassola_concentration",
@@ -27,15 +29,6 @@ __all__ = [
     "vergassola_encounter_scale",
 ]
 
-
-def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a positive number, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 def _wind_vector(wind) -> np.ndarray:

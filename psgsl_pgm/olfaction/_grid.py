@@ -63,17 +63,23 @@ def as_wind_vector(wind, name: str = "wind"):
     """``None`` or a validated (u_x, u_y) tuple of floats in m/s."""
     if wind is None:
         return None
-    if isinstance(wind, (str, bytes)):
-        raise TypeError(f"{name} must be a (u_x, u_y) pair in m/s or None, got {type(wind).__name__}")
-    w = np.asarray(wind)
-    if w.dtype == object or not np.issubdtype(w.dtype, np.number) or np.iscomplexobj(w):
-        raise TypeError(f"{name} must be a (u_x, u_y) pair of real numbers in m/s, got dtype {w.dtype}")
-    if w.shape != (2,):
-        raise ValueError(f"{name} must be a (u_x, u_y) pair in m/s, got shape {w.shape}")
-    w = w.astype(np.float64)
-    if not np.isfinite(w).all():
-        raise ValueError(f"{name} must be finite, got {tuple(w)}")
+    w = real_pair(wind, name, "a (u_x, u_y)", "m/s")
     return (float(w[0]), float(w[1]))
+
+
+def real_pair(value, name: str, what: str, unit: str) -> np.ndarray:
+    """Validate a finite pair of real numbers, e.g. a position (x, y) or a wind vector; (2,) float64."""
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name} must be {what} pair in {unit}, got {type(value).__name__}")
+    p = np.asarray(value)
+    if p.dtype == object or not np.issubdtype(p.dtype, np.number) or np.iscomplexobj(p):
+        raise TypeError(f"{name} must be {what} pair of real numbers in {unit}, got dtype {p.dtype}")
+    if p.shape != (2,):
+        raise ValueError(f"{name} must be {what} pair in {unit}, got shape {p.shape}")
+    p = p.astype(np.float64)
+    if not np.isfinite(p).all():
+        raise ValueError(f"{name} must be finite, got {tuple(p)}")
+    return p
 
 
 class GridGeometry:
@@ -151,16 +157,7 @@ class GridGeometry:
         cell : tuple of int
             (row, col).
         """
-        if isinstance(position, (str, bytes)) or position is None:
-            raise TypeError(f"{name} must be an (x, y) pair in metres, got {type(position).__name__}")
-        p = np.asarray(position)
-        if p.dtype == object or not np.issubdtype(p.dtype, np.number) or np.iscomplexobj(p):
-            raise TypeError(f"{name} must be an (x, y) pair of real numbers in metres, got {p.dtype}")
-        if p.shape != (2,):
-            raise ValueError(f"{name} must be an (x, y) pair in metres, got shape {p.shape}")
-        p = p.astype(np.float64)
-        if not np.isfinite(p).all():
-            raise ValueError(f"{name} must be finite, got {tuple(p)}")
+        p = real_pair(position, name, "an (x, y)", "metres")
         col = int(np.floor((p[0] - self.origin[0]) / self.resolution))
         row = int(np.floor((p[1] - self.origin[1]) / self.resolution))
         h, w = self.shape
@@ -210,3 +207,16 @@ class GridGeometry:
                 f"{', '.join('.' + m for m in missing)}"
             )
         return cls(grid_map.occupancy, resolution=grid_map.resolution, origin=grid_map.origin, outlets=outlets)
+
+
+def positive(value, name: str) -> float:
+    """A positive finite number (bools and strings refused)."""
+    if isinstance(value, (bool, str, bytes)) or value is None:
+        raise TypeError(f"{name} must be a positive number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a positive number, got {value!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return v

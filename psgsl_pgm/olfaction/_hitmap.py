@@ -22,21 +22,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from ._grid import GridGeometry, as_wind_vector
+from ._grid import GridGeometry, as_wind_vector, positive as _positive
 
 __all__ = ["HitProbabilityMap"]
-
-
-def _positive(value, name: str) -> float:
-    if isinstance(value, (bool, str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a positive number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a positive number, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 def free_space_graph(free: np.ndarray, resolution: float) -> sp.csr_matrix:
