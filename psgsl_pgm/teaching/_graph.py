@@ -46,7 +46,7 @@ def network_layout(model) -> dict:
         if kind == "S":
             pos[v] = (middle, 0.0) if v == "S" else (column[v[2:]], 0.0)
         elif kind == "G":
-            pos[v] = (middle + 0.8, 0.9) if v == "G" else (column[v[2:]] + 0.4, 0.55)
+            pos[v] = (middle + 0.8, 0.9) if v == "G" else (column[v[2:]] - 0.4, 0.55)
         elif kind == "O":
             pos[v] = (column[v[2:]], -1.0)
         elif kind == "Z":
