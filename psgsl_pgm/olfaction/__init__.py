@@ -24,7 +24,7 @@ from ._analytic import (
     vergassola_encounter_scale,
 )
 from ._base import Observation, OlfactoryEstimator
-from ._calibrate import fit_encounter_scale
+from ._calibrate import encounter_scale_mle, fit_encounter_scale
 from ._grid import GridGeometry
 from ._hitmap import HitProbabilityMap
 from ._infotaxis import GridInfotaxis
@@ -43,6 +43,7 @@ __all__ = [
     "advection_diffusion_operator",
     "bernoulli",
     "correlation_length",
+    "encounter_scale_mle",
     "fit_encounter_scale",
     "vergassola_concentration",
     "vergassola_encounter_rate",

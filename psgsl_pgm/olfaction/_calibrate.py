@@ -7,7 +7,7 @@ from scipy.optimize import brentq
 
 from ._plume import PlumeModel
 
-__all__ = ["fit_encounter_scale"]
+__all__ = ["encounter_scale_mle", "fit_encounter_scale"]
 
 
 def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit_rate: float = 0.0) -> float:
@@ -61,7 +61,42 @@ def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit
         raise ValueError(f"false_hit_rate must lie in [0, 1), got {false_hit_rate!r}")
     field = model.concentration(source)
     cells = np.array([model.cell_of(p, "positions[i]") for p in pos], dtype=np.int64).reshape(-1, 2)
-    c = field[cells[:, 0], cells[:, 1]]
+    return encounter_scale_mle(field[cells[:, 0], cells[:, 1]], g, false_hit_rate=eps)
+
+
+def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> float:
+    """κ maximising Π_k P(g_k; κ c_k) given predicted Green's-function values c_k = G(x_k | s_k).
+
+    The maximiser of :func:`fit_encounter_scale` for readings whose predictions are already known — e.g. pooled
+    over several calibration runs with different sources and maps.
+
+    Parameters
+    ----------
+    predicted : (n,) array_like of float
+        c_k ≥ 0, s/m² (``PlumeModel.concentration(source)`` at each sensor cell).
+    hits : (n,) array_like of bool
+    false_hit_rate : float, keyword-only
+        ε ∈ [0, 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = encounter_scale_mle([1.0, 1.0, 1.0, 1.0], [True, False, False, False])
+    >>> bool(abs(k - -np.log(0.75)) < 1e-12)          # 1 − exp(−κ) = 1/4: a quarter of the readings hit
+    True
+    """
+    c = np.asarray(predicted, dtype=np.float64)
+    if c.ndim != 1 or not np.isfinite(c).all() or (c < 0).any():
+        raise ValueError(f"predicted must be a (n,) array of finite non-negative values, got shape {c.shape}")
+    g = np.asarray(hits)
+    if g.dtype != bool and not (np.issubdtype(g.dtype, np.integer) and np.isin(g, (0, 1)).all()):
+        raise TypeError(f"hits must be booleans (or 0/1), got dtype {g.dtype}")
+    g = g.astype(bool)
+    if g.shape != c.shape:
+        raise ValueError(f"hits must have shape {c.shape} like predicted, got {g.shape}")
+    eps = float(false_hit_rate)
+    if not 0 <= eps < 1:
+        raise ValueError(f"false_hit_rate must lie in [0, 1), got {false_hit_rate!r}")
     c_hit, c_miss = c[g & (c > 0)], c[~g]
     if c_hit.size == 0:
         raise ValueError("no hit where the model predicts gas from this source: the maximum-likelihood κ is 0")

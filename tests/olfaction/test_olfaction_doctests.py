@@ -7,7 +7,7 @@ import importlib
 
 import pytest
 
-MODULES = ["_analytic", "_grid", "_hitmap", "_infotaxis", "_operator", "_plume", "_pmfs"]
+MODULES = ["_analytic", "_calibrate", "_grid", "_hitmap", "_infotaxis", "_operator", "_plume", "_pmfs"]
 
 
 @pytest.mark.parametrize("name", MODULES)
