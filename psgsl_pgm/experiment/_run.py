@@ -1,0 +1,194 @@
+"""One search run: the robot follows the tour, every variant sees the same readings and frames.
+
+Data flow per stop (paper Secs. "Model" and "Validation"):
+
+    gas reading g_t  ──> olfactory estimator ──────────────────────────> p(s | g)           "olfaction"
+    camera frames z_t ─> class beliefs p(o_c | z_c) (from p(o))  ──> p(s | z) ─┐
+                     └─> class beliefs p(o_c | z_c, room_c)      ──> p(s | z) ─┤ fuse with p(s | g)
+                                                                                ├──> p(s | g, z)   "semantics"
+                                                                                └──> p(s | g, z)   "semantics+rooms"
+
+The olfactory estimator is one object shared by the three variants, so they differ *only* in the semantic
+factor of eq. ``combined-conditionals``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._fusion import fuse
+from .._semantic import semantic_source_probability
+from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ._metrics import error_and_spread
+from ._ontology import house_ontology
+from ._tour import Tour, exploration_tour
+
+__all__ = ["RunResult", "run_search", "semantic_terms", "walk"]
+
+
+@dataclass(frozen=True, eq=False)
+class RunResult:
+    """Per-step metrics of one run (step 0 = before the first stop).
+
+    Attributes
+    ----------
+    source, seed, estimator : identification of the run
+    source_xy : (2,) ndarray
+        True source position, metres.
+    time : (n + 1,) ndarray
+        Simulated time since the robot started, s.
+    position : (n + 1, 2) ndarray
+        Robot position at each step (the start for step 0).
+    hit : (n + 1,) ndarray of bool
+        Gas hit at each step (False at step 0).
+    error, spread : (n + 1, 3) ndarray
+        ‖E[s] − s_true‖ and the standard deviation √E‖s − E[s]‖² (m) for each variant of :data:`VARIANTS`.
+    snapshots : dict
+        ``{step: (3, H, W) ndarray}`` posteriors at the requested steps (for Fig. progression).
+    """
+
+    source: str
+    seed: int
+    estimator: str
+    source_xy: np.ndarray
+    time: np.ndarray
+    position: np.ndarray
+    hit: np.ndarray
+    error: np.ndarray
+    spread: np.ndarray
+    snapshots: dict = field(default_factory=dict)
+
+    @property
+    def n_steps(self) -> int:
+        return len(self.time) - 1
+
+
+def semantic_terms(maps, likelihood, class_prior):
+    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W)."""
+    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior) for m in maps])
+
+
+def walk(world, tour: Tour, config: ExperimentConfig, *, camera: bool = True):
+    """Drive ``world``'s robot along ``tour``: yields ``(j, stop, gas reading, wind, frames)`` per stop.
+
+    Between stops the world advances by the driving time (distance / ``config.speed``); at a look-around
+    waypoint by ``config.turn_time`` per heading. ``camera=False`` skips the frames (calibration runs).
+    """
+    for j, stop in enumerate(tour.stops):
+        if j:
+            world.advance(float(np.linalg.norm(stop - tour.stops[j - 1])) / config.speed)  # drive
+        reading = world.sense_gas(stop)
+        wind = world.sense_wind(stop)
+        frames = []
+        for heading in tour.headings[j] if camera else ():
+            frames.append(world.camera_frame((stop[0], stop[1], heading)))
+            if len(tour.headings[j]) > 1:
+                world.advance(config.turn_time)  # turn to the next heading
+        yield j, stop, reading, wind, frames
+
+
+def _make_estimator(name, model, config):
+    from ..olfaction import GridInfotaxis, PMFSEstimator
+
+    if name == "infotaxis":
+        return GridInfotaxis.from_model(model, tempering=config.tempering, false_hit_rate=config.false_hit_rate)
+    if name == "pmfs":
+        return PMFSEstimator.from_model(model)
+    raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
+
+
+def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
+               snapshot_at=(), world=None, tour: Tour | None = None) -> RunResult:
+    """Run one search in the simulated house and measure every variant at every step.
+
+    Parameters
+    ----------
+    source : str or (2,) array_like
+        See :func:`parse_source`: a class name (``"oven"``) or a position.
+    seed : int
+        Seed of the world (house jitter, wind, gas, sensors, detector).
+    estimator : {"infotaxis", "pmfs"}
+        Olfactory estimator p(s | g).
+    config : ExperimentConfig, optional, keyword-only
+    snapshot_at : sequence of float, keyword-only
+        Fractions of the search (0 = before the first stop, 1 = the end) whose three posteriors are kept, at
+        step round(f · n).
+    world : psgsl_pgm.sim.World, optional, keyword-only
+        A prepared world (default: ``make_world(seed=seed, source=source, warm_up=config.warm_up)``).
+    tour : Tour, optional, keyword-only
+        Default: :func:`exploration_tour` of the world's house.
+
+    Returns
+    -------
+    RunResult
+    """
+    from ..olfaction import PlumeModel
+    from ..sim import make_world, match_names
+
+    config = ExperimentConfig() if config is None else config
+    if not isinstance(config, ExperimentConfig):
+        raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")
+    if estimator not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"seed must be an integer, got {seed!r}")
+    spec = parse_source(source)
+    if world is None:
+        world = make_world(seed=int(seed), source=spec, warm_up=config.warm_up)
+    house = world.house
+    tour = exploration_tour(house) if tour is None else tour
+    ontology = house_ontology()
+    if config.gas not in ontology.gases:
+        raise ValueError(f"gas must be one of the ontology's gases {ontology.gases}, got {config.gas!r}")
+    classes = world.detector.classes
+    order = match_names(classes, ontology.classes)
+    if (order < 0).any():
+        raise ValueError(f"the detector's classes {classes} are not all in the ontology {ontology.classes}")
+    likelihood = ontology.source_likelihood(config.gas)[order]  # p(o | s, γ) in the detector's class order
+    beta = ontology.class_prior[order]  # β = p(o | ¬s)
+    room_table = ontology.room_table[:, order]
+    plain = world.semantic_map(beta)
+    rooms = world.semantic_map(beta, room_table=room_table / room_table.sum(axis=1, keepdims=True),
+                               room_names=ontology.rooms)
+    model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
+                                     diffusivity=config.diffusivity, lifetime=config.lifetime,
+                                     encounter_scale=config.encounter_scale)
+    est = _make_estimator(estimator, model, config)
+    centres = house.grid.cell_centres()
+    truth = world.source
+
+    n = len(tour)
+    fractions = np.asarray(snapshot_at, dtype=np.float64).ravel()
+    if not (np.isfinite(fractions).all() and ((fractions >= 0) & (fractions <= 1)).all()):
+        raise ValueError(f"snapshot_at must hold fractions in [0, 1], got {snapshot_at!r}")
+    keep = {int(round(f * n)) for f in fractions}
+    err = np.empty((n + 1, len(VARIANTS)))
+    spr = np.empty((n + 1, len(VARIANTS)))
+    times = np.zeros(n + 1)
+    pos = np.empty((n + 1, 2))
+    hits = np.zeros(n + 1, dtype=bool)
+    snaps = {}
+    t0 = world.time
+
+    def record(step):
+        p_g = est.posterior  # p(s | g)
+        p_z = semantic_terms((plain, rooms), likelihood, beta)  # p(s | z) without / with rooms
+        post = np.stack([p_g, fuse(p_g, p_z[0]), fuse(p_g, p_z[1])])  # p(s | g, z) ∝ p(s | g) p(s | z)
+        err[step], spr[step] = error_and_spread(post, centres, truth)
+        times[step] = world.time - t0
+        if step in keep:
+            snaps[step] = post
+
+    pos[0] = tour.stops[0]
+    record(0)
+    for j, stop, reading, wind, frames in walk(world, tour, config):
+        est.update(stop, reading.hit, wind)
+        for frame in frames:
+            plain.update(frame)  # the same frames for both maps: one observation stream
+            rooms.update(frame)
+        pos[j + 1], hits[j + 1] = stop, reading.hit
+        record(j + 1)
+    label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
+    return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps)

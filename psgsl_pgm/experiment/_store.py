@@ -1,0 +1,48 @@
+"""One file per finished run (``.npz``, written atomically) — what makes ``psgsl experiment`` resumable."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ._config import source_label
+from ._run import RunResult
+
+__all__ = ["load_run", "run_path", "save_run"]
+
+
+def run_path(directory, source, estimator: str, seed: int) -> Path:
+    """``DIR/runs/<source>__<estimator>__seed<seed>.npz``."""
+    return Path(directory) / "runs" / f"{source_label(source)}__{estimator}__seed{int(seed)}.npz"
+
+
+def save_run(result: RunResult, path) -> Path:
+    """Write ``result`` to ``path`` (via a temporary file and ``os.replace``: a killed run leaves no file)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    steps = np.array(sorted(result.snapshots), dtype=np.int64)
+    snaps = np.stack([result.snapshots[s] for s in steps]) if len(steps) else np.zeros((0, 3, 0, 0))
+    tmp = path.with_name(path.name + ".part")
+    with open(tmp, "wb") as fh:
+        np.savez_compressed(
+            fh, source=np.array(result.source), seed=np.array(result.seed), estimator=np.array(result.estimator),
+            source_xy=result.source_xy, time=result.time, position=result.position, hit=result.hit,
+            error=result.error, spread=result.spread, snapshot_steps=steps, snapshots=snaps,
+        )
+    os.replace(tmp, path)
+    return path
+
+
+def load_run(path) -> RunResult:
+    """Read a run written by :func:`save_run` (ValueError naming the file if it is not one)."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            steps = z["snapshot_steps"]
+            snaps = {int(s): z["snapshots"][i] for i, s in enumerate(steps)}
+            return RunResult(str(z["source"]), int(z["seed"]), str(z["estimator"]), z["source_xy"], z["time"],
+                             z["position"], z["hit"], z["error"], z["spread"], snaps)
+    except (OSError, KeyError, ValueError, EOFError) as exc:
+        raise ValueError(f"{path} is not a run file written by psgsl ({exc})") from None

@@ -1,0 +1,121 @@
+"""Aggregation over runs: progress-aligned curves, ``summary.json``, the per-step CSV and the printed table."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ._config import VARIANTS
+from ._metrics import mean_ci
+
+__all__ = ["EARLY", "aligned", "format_table", "summarize", "write_csv", "write_summary"]
+
+#: The "early" point of the search: a quarter of the tour (issue 5; paper Fig. error-chart's initial phase).
+EARLY = 0.25
+
+
+def aligned(runs, name: str, grid) -> np.ndarray:
+    """(runs, len(grid), 3) metric ``name`` ("error" or "spread") at search progress ``grid`` ∈ [0, 1].
+
+    Progress of step j in a run of n stops is j / n (tours differ by a few stops between seeds, because the
+    furniture moves); values are linearly interpolated between steps.
+    """
+    grid = np.asarray(grid, dtype=np.float64)
+    out = np.empty((len(runs), len(grid), len(VARIANTS)))
+    for r, run in enumerate(runs):
+        values = getattr(run, name)
+        progress = np.arange(len(values)) / (len(values) - 1)
+        for v in range(len(VARIANTS)):
+            out[r, :, v] = np.interp(grid, progress, values[:, v])
+    return out
+
+
+def summarize(runs) -> dict:
+    """Mean and 95 % CI (Student t over runs) of the early and final error and spread, per variant.
+
+    Returns
+    -------
+    dict
+        ``{"n_runs": n, "seeds": [...], "early_progress": 0.25, <variant>: {"early_error": {"mean", "ci95"},
+        "final_error": ..., "early_spread": ..., "final_spread": ...}, "paired": {...}}``. ``paired`` holds the
+        mean and CI of per-run *differences* (e.g. olfaction − semantics), which is the right test of "lower
+        than" when all variants share one observation stream.
+    """
+    runs = list(runs)
+    if not runs:
+        raise ValueError("summarize needs at least one run")
+    err = aligned(runs, "error", [EARLY, 1.0])  # (runs, 2, 3)
+    spr = aligned(runs, "spread", [EARLY, 1.0])
+    out = {"n_runs": len(runs), "seeds": sorted({r.seed for r in runs}), "early_progress": EARLY}
+    for v, name in enumerate(VARIANTS):
+        out[name] = {
+            "early_error": mean_ci(err[:, 0, v]),
+            "final_error": mean_ci(err[:, 1, v]),
+            "early_spread": mean_ci(spr[:, 0, v]),
+            "final_spread": mean_ci(spr[:, 1, v]),
+        }
+    pairs = (("olfaction", "semantics"), ("olfaction", "semantics+rooms"), ("semantics", "semantics+rooms"))
+    out["paired"] = {
+        f"{a} - {b}": {
+            "early_error": mean_ci(err[:, 0, VARIANTS.index(a)] - err[:, 0, VARIANTS.index(b)]),
+            "final_error": mean_ci(err[:, 1, VARIANTS.index(a)] - err[:, 1, VARIANTS.index(b)]),
+        }
+        for a, b in pairs
+    }
+    return out
+
+
+def _clean(obj):
+    """JSON-safe copy (NaN -> None: ``json`` would write the non-standard token NaN)."""
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def write_summary(summary: dict, path) -> Path:
+    path = Path(path)
+    path.write_text(json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8")
+    return path
+
+
+def write_csv(runs, path) -> Path:
+    """Long-format per-step metrics: one row per run, step and variant."""
+    path = Path(path)
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(["source", "estimator", "seed", "step", "progress", "time_s", "x", "y", "hit", "variant",
+                    "error_m", "spread_m"])
+        for run in runs:
+            n = run.n_steps
+            for j in range(n + 1):
+                for v, name in enumerate(VARIANTS):
+                    w.writerow([run.source, run.estimator, run.seed, j, f"{j / n:.6f}", f"{run.time[j]:.3f}",
+                                f"{run.position[j, 0]:.3f}", f"{run.position[j, 1]:.3f}", int(run.hit[j]), name,
+                                f"{run.error[j, v]:.6f}", f"{run.spread[j, v]:.6f}"])
+    return path
+
+
+def _fmt(stat: dict) -> str:
+    lo, hi = stat["ci95"]
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return f"{stat['mean']:5.2f}"
+    return f"{stat['mean']:5.2f} [{lo:5.2f}, {hi:5.2f}]"
+
+
+def format_table(summary: dict, *, title: str = "") -> str:
+    """The summary as a plain-text table (metres; mean [95 % CI] over runs)."""
+    head = f"{'variant':<16} {'error at 1/4':>21} {'final error':>21} {'final spread':>21}"
+    lines = [title] if title else []
+    lines += [f"{summary['n_runs']} runs (seeds {summary['seeds']}); metres, mean [95 % CI]", head, "-" * len(head)]
+    for name in VARIANTS:
+        s = summary[name]
+        lines.append(f"{name:<16} {_fmt(s['early_error']):>21} {_fmt(s['final_error']):>21} "
+                     f"{_fmt(s['final_spread']):>21}")
+    return "\n".join(lines)

@@ -1,0 +1,191 @@
+"""The exploration tour shared by every variant: one path through the rooms with regular stops.
+
+The paper compares its variants on *the same path with the same observations* (Sec. "Validation"). The tour is
+therefore planned from the map alone — never from the gas or the semantic beliefs — so that it is identical
+for every source, estimator and variant:
+
+1. navigable cells: free, not furniture or a window, at least ``clearance`` from any of them;
+2. waypoints: a lattice with ``waypoint_spacing`` inside every room *area* (a connected piece of one room
+   category; the two bedrooms are two areas);
+3. order: from ``start``, go to the nearest unvisited area (geodesic distance), sweep its waypoints
+   nearest-first, repeat;
+4. path: 8-connected geodesic shortest paths between consecutive waypoints (``scipy.sparse.csgraph``);
+5. stops: every ``stop_spacing`` metres of path; the camera looks along the direction of travel, and turns
+   through four headings at every waypoint.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage as ndi
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+__all__ = ["Tour", "exploration_tour"]
+
+
+@dataclass(frozen=True, eq=False)
+class Tour:
+    """A planned tour.
+
+    Attributes
+    ----------
+    stops : (n, 2) ndarray
+        Stop positions (x, y) in metres, in visiting order.
+    headings : tuple of (m_j,) ndarray
+        Camera headings (radians) at each stop; one (travel direction) or four (at a waypoint).
+    path : (p, 2) ndarray
+        The whole path (x, y) through cell centres, for drawing.
+    distance : (n,) ndarray
+        Path length travelled when reaching each stop, metres.
+    waypoint : (n,) ndarray of bool
+        Whether the stop is a waypoint (look-around stop).
+    """
+
+    stops: np.ndarray
+    headings: tuple
+    path: np.ndarray
+    distance: np.ndarray
+    waypoint: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.stops)
+
+
+def _grid_graph(nav: np.ndarray, resolution: float):
+    """Sparse 8-connected graph over navigable cells (edge weight = centre distance, no corner cutting)."""
+    h, w = nav.shape
+    idx = np.full(nav.shape, -1, dtype=np.int64)
+    idx[nav] = np.arange(int(nav.sum()))
+
+    def src(d, n):  # cells whose neighbour at offset d exists
+        return slice(max(0, -d), n - max(0, d))
+
+    def dst(d, n):  # those neighbours
+        return slice(max(0, d), n - max(0, -d))
+
+    rows, cols, wts = [], [], []
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        a = idx[src(dr, h), src(dc, w)]
+        b = idx[dst(dr, h), dst(dc, w)]
+        ok = (a >= 0) & (b >= 0)
+        if dr and dc:  # a diagonal step needs both side cells free
+            ok &= (idx[dst(dr, h), src(dc, w)] >= 0) & (idx[src(dr, h), dst(dc, w)] >= 0)
+        rows.append(a[ok])
+        cols.append(b[ok])
+        wts.append(np.full(int(ok.sum()), resolution * np.hypot(dr, dc)))
+    n = int(nav.sum())
+    r, c, v = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
+    g = coo_matrix((np.concatenate([v, v]), (np.concatenate([r, c]), np.concatenate([c, r]))), shape=(n, n))
+    return g.tocsr(), idx
+
+
+def _path(pred: np.ndarray, target: int) -> list:
+    out = [target]
+    while pred[out[-1]] >= 0:
+        out.append(int(pred[out[-1]]))
+    return out[::-1]
+
+
+def exploration_tour(house, *, start=(0.8, 6.0), waypoint_spacing: float = 1.6, stop_spacing: float = 0.5,
+                     clearance: float = 0.25) -> Tour:
+    """Plan the exploration tour through every room of ``house`` (see the module docstring).
+
+    Parameters
+    ----------
+    house : psgsl_pgm.sim.House
+    start : (2,) array_like, keyword-only
+        Start position (x, y), metres (default: the west end of the default house's hallway).
+    waypoint_spacing : float, keyword-only
+        Lattice spacing of the waypoints inside each room area, metres.
+    stop_spacing : float, keyword-only
+        Path length between stops, metres.
+    clearance : float, keyword-only
+        Minimum distance of the path from walls, furniture and windows, metres.
+
+    Returns
+    -------
+    Tour
+
+    Examples
+    --------
+    >>> from psgsl_pgm.sim import default_house
+    >>> tour = exploration_tour(default_house(0))
+    >>> len(tour) > 100, bool(tour.waypoint[0])
+    (True, True)
+    """
+    for name, value in (("waypoint_spacing", waypoint_spacing), ("stop_spacing", stop_spacing),
+                        ("clearance", clearance)):
+        if not (isinstance(value, (int, float, np.floating)) and np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a positive number of metres, got {value!r}")
+    grid = house.grid
+    res = grid.resolution
+    blocked = house.robot_obstacles
+    nav = ~blocked & (ndi.distance_transform_edt(~blocked) * res > clearance)
+    graph, idx = _grid_graph(nav, res)
+    start_rc = tuple(int(v) for v in grid.world_to_cell(np.asarray(start, dtype=np.float64)))
+    if not (0 <= start_rc[0] < nav.shape[0] and 0 <= start_rc[1] < nav.shape[1]) or not nav[start_rc]:
+        raise ValueError(f"start {tuple(start)} must be a navigable position of the house (cell {start_rc})")
+    # waypoints: a lattice per room area, reachable from the start
+    reach = np.isfinite(dijkstra(graph, indices=int(idx[start_rc]))).nonzero()[0]
+    reachable = np.zeros(nav.shape, bool)
+    reachable[np.isin(idx, reach)] = True
+    step = max(1, int(round(waypoint_spacing / res)))
+    lattice = np.zeros(nav.shape, bool)
+    lattice[step // 2 :: step, step // 2 :: step] = True
+    areas = []
+    for k in range(len(house.room_names)):
+        pieces, n = ndi.label(house.room_labels == k)
+        for j in range(1, n + 1):
+            area = (pieces == j) & reachable
+            if not (area & nav).any():
+                continue
+            # lattice points snapped to the nearest navigable cell of the area (furniture displaces them)
+            _, (ri, ci) = ndi.distance_transform_edt(~(area & nav), return_indices=True)
+            lat = np.argwhere(lattice & (house.room_labels == k) & (pieces == j))
+            snapped = np.stack([ri[lat[:, 0], lat[:, 1]], ci[lat[:, 0], lat[:, 1]]], axis=-1)
+            near = np.linalg.norm(snapped - lat, axis=-1) <= step / 2
+            pts = np.unique(snapped[near], axis=0)
+            if len(pts) == 0:  # a small area: its most interior navigable cell
+                dist = ndi.distance_transform_edt(area)
+                pts = np.array([np.unravel_index(int(np.argmax(dist)), area.shape)])
+            areas.append(idx[pts[:, 0], pts[:, 1]])
+    # order: nearest unvisited area, then its waypoints nearest-first (geodesic)
+    current = int(idx[start_rc])
+    order = [current]
+    remaining = list(range(len(areas)))
+    while remaining:
+        d = dijkstra(graph, indices=current)
+        nearest = min(remaining, key=lambda a: d[areas[a]].min())
+        remaining.remove(nearest)
+        todo = list(areas[nearest])
+        while todo:
+            d = dijkstra(graph, indices=current)
+            nxt = min(todo, key=lambda v: d[v])
+            todo.remove(nxt)
+            if nxt != current:
+                order.append(int(nxt))
+                current = int(nxt)
+    cells_of = np.argwhere(nav)  # node id -> (row, col), same order as idx
+    nodes, is_wp = [order[0]], [True]
+    for a, b in zip(order[:-1], order[1:]):
+        _, pred = dijkstra(graph, indices=a, return_predecessors=True)
+        seg = _path(pred, b)[1:]
+        nodes.extend(seg)
+        is_wp.extend([False] * (len(seg) - 1) + [True])
+    path = grid.cell_to_world(cells_of[np.array(nodes)])
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    is_wp = np.array(is_wp)
+    # stops: every stop_spacing of arc length, plus every waypoint
+    marks = np.floor(arc / stop_spacing + 1e-9)
+    take = np.concatenate([[True], marks[1:] > marks[:-1]]) | is_wp
+    keep = np.flatnonzero(take)
+    stops, dist, wp = path[keep], arc[keep], is_wp[keep]
+    headings = []
+    for j, p in enumerate(stops):
+        nxt = stops[min(j + 1, len(stops) - 1)] if j + 1 < len(stops) else p + (p - stops[j - 1])
+        travel = float(np.arctan2(nxt[1] - p[1], nxt[0] - p[0]))
+        headings.append(travel + np.arange(4) * (np.pi / 2) if wp[j] else np.array([travel]))
+    return Tour(stops=stops, headings=tuple(headings), path=path, distance=dist, waypoint=wp)

@@ -1,0 +1,85 @@
+"""Metrics, confidence intervals, run files and summaries of the validation experiment."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from psgsl_pgm.experiment import RunResult, VARIANTS, error_and_spread, load_run, mean_ci, save_run, summarize
+from psgsl_pgm.experiment._summary import aligned, write_csv, write_summary
+
+
+def test_error_and_spread_equal_explicit_sums():
+    rng = np.random.default_rng(3)
+    h, w = 7, 9
+    p = rng.dirichlet(np.ones(h * w), size=4).reshape(4, h, w)
+    centres = np.stack(np.meshgrid(0.1 * np.arange(w) + 0.05, 0.1 * np.arange(h) + 0.05, indexing="xy"), axis=-1)
+    truth = np.array([0.3, 0.2])
+    err, spread = error_and_spread(p, centres, truth)
+    for k in range(4):
+        mx = sum(p[k, r, c] * centres[r, c] for r in range(h) for c in range(w))
+        var = sum(p[k, r, c] * np.sum((centres[r, c] - mx) ** 2) for r in range(h) for c in range(w))
+        assert err[k] == pytest.approx(np.linalg.norm(mx - truth), rel=1e-12)
+        assert spread[k] == pytest.approx(np.sqrt(var), rel=1e-10)
+
+
+def test_mean_ci_is_the_student_t_interval():
+    x = np.random.default_rng(0).normal(2.0, 1.5, size=12)
+    lo, hi = stats.t.interval(0.95, len(x) - 1, loc=x.mean(), scale=stats.sem(x))
+    r = mean_ci(x)
+    assert r["mean"] == pytest.approx(x.mean(), rel=1e-14)
+    np.testing.assert_allclose(r["ci95"], [lo, hi], rtol=1e-12)
+    one = mean_ci([1.0])
+    assert one["mean"] == 1.0 and all(np.isnan(one["ci95"]))
+
+
+def _fake_run(seed, n, rng):
+    t = np.linspace(0, 600, n + 1)
+    err = rng.uniform(0, 5, size=(n + 1, 3))
+    return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), t, rng.uniform(0, 9, (n + 1, 2)),
+                     rng.random(n + 1) < 0.2, err, rng.uniform(0, 2, size=(n + 1, 3)),
+                     {0: rng.dirichlet(np.ones(12), size=3).reshape(3, 3, 4)})
+
+
+def test_run_files_round_trip_and_bad_files_are_named(tmp_path):
+    run = _fake_run(4, 20, np.random.default_rng(1))
+    path = save_run(run, tmp_path / "runs" / "a.npz")
+    back = load_run(path)
+    for name in ("source_xy", "time", "position", "hit", "error", "spread"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(run, name))
+    assert (back.source, back.seed, back.estimator) == ("oven", 4, "infotaxis")
+    np.testing.assert_array_equal(back.snapshots[0], run.snapshots[0])
+    assert not list((tmp_path / "runs").glob("*.part"))
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip")
+    with pytest.raises(ValueError, match="bad.npz is not a run file"):
+        load_run(bad)
+
+
+def test_summary_aligns_runs_of_different_length_by_search_progress(tmp_path):
+    rng = np.random.default_rng(2)
+    runs = [_fake_run(s, n, rng) for s, n in zip(range(5), (8, 12, 16, 9, 20))]
+    s = summarize(runs)
+    assert s["n_runs"] == 5 and s["seeds"] == [0, 1, 2, 3, 4] and s["early_progress"] == 0.25
+    for v, name in enumerate(VARIANTS):
+        early = [np.interp(0.25, np.arange(r.n_steps + 1) / r.n_steps, r.error[:, v]) for r in runs]
+        final = [r.error[-1, v] for r in runs]
+        assert s[name]["early_error"] == mean_ci(early)
+        assert s[name]["final_error"] == mean_ci(final)
+    d = s["paired"]["olfaction - semantics"]["final_error"]
+    assert d == mean_ci([r.error[-1, 0] - r.error[-1, 1] for r in runs])
+    # a run with n = 8 has step 2 exactly at a quarter
+    np.testing.assert_allclose(aligned(runs[:1], "error", [0.25])[0, 0], runs[0].error[2], rtol=0, atol=0)
+    data = json.loads(write_summary(s, tmp_path / "s.json").read_text())
+    assert set(data["semantics+rooms"]["final_error"]) == {"mean", "ci95"}
+    lines = write_csv(runs, tmp_path / "m.csv").read_text().splitlines()
+    assert len(lines) == 1 + 3 * sum(r.n_steps + 1 for r in runs)
+    assert lines[0].startswith("source,estimator,seed,step,progress,time_s")
+
+
+def test_summarize_needs_runs():
+    with pytest.raises(ValueError, match="at least one run"):
+        summarize([])
