@@ -1,11 +1,20 @@
-"""Command line: ``psgsl`` (or ``python -m psgsl_pgm``)."""
+"""Command line: ``psgsl`` (or ``python -m psgsl_pgm``).
+
+``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``. Usage errors and
+bad input files give a one-line message and exit code 2, never a traceback.
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
+
+
+class _UsageError(Exception):
+    """A bad argument or input file: reported in one line, exit code 2."""
 
 
 def _kitchen(args) -> int:
@@ -19,19 +28,151 @@ def _kitchen(args) -> int:
     return 0
 
 
+def _demo(args) -> int:
+    from .experiment import DEMO_SEEDS, format_table, run_demo
+
+    seeds = range(args.seeds) if args.seeds is not None else DEMO_SEEDS
+    print(f"psgsl demo: smoke from the kitchen oven of the simulated house, {len(seeds)} seeds, "
+          f"{args.workers} workers -> {args.out}", flush=True)
+    summary = run_demo(args.out, seeds=seeds, workers=args.workers, progress=not args.quiet)
+    print(format_table(summary, title="olfaction (grid Infotaxis) vs + camera semantics vs + room categories"))
+    print(f"written to {args.out}: summary.json, summary.txt, metrics.csv, error-chart.png, progression.png, "
+          "room-types.png, runs/")
+    return 0
+
+
+def _experiment(args) -> int:
+    from .experiment import format_table, parse_source, run_experiment
+
+    try:
+        sources = [parse_source(s) for s in args.sources]
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    summaries = run_experiment(sources, range(args.seeds), args.estimators, out=args.out, workers=args.workers,
+                               progress=not args.quiet)
+    for key, summary in summaries.items():
+        print(format_table(summary, title=key))
+        print()
+    print(f"written to {args.out}: summary.json, metrics.csv, one folder per source and estimator, runs/")
+    return 0
+
+
+def _load_array(path, name):
+    import numpy as np
+
+    try:
+        arr = np.load(path, allow_pickle=False)
+    except FileNotFoundError:
+        raise _UsageError(f"{name}: no such file {path!r}") from None
+    except (OSError, ValueError, EOFError) as exc:
+        raise _UsageError(f"{name}: {path!r} is not a .npy array ({exc})") from None
+    if not isinstance(arr, np.ndarray):
+        raise _UsageError(f"{name}: expected one array in a .npy file, got an archive in {path!r}")
+    return arr
+
+
+def _estimate(args) -> int:
+    try:
+        return _estimate_checked(args)
+    except (ValueError, TypeError) as exc:  # the library's messages name what was expected and what arrived
+        raise _UsageError(str(exc)) from None
+
+
+def _estimate_checked(args) -> int:
+    import numpy as np
+
+    from . import Ontology, fuse, semantic_source_probability
+
+    try:
+        ontology = Ontology.from_yaml(args.ontology)
+    except FileNotFoundError:
+        raise _UsageError(f"--ontology: no such file {args.ontology!r}") from None
+    class_probs = _load_array(args.class_probs, "--class-probs")
+    olfactory = _load_array(args.olfactory, "--olfactory")
+    if args.gas is None:
+        if len(ontology.gases) != 1:
+            raise _UsageError(f"--gas is required: the ontology has gases {list(ontology.gases)}")
+        gas = ontology.gases[0]
+    else:
+        gas = args.gas
+    if class_probs.shape[-1:] != (len(ontology.classes),):
+        raise _UsageError(f"--class-probs must have shape (..., {len(ontology.classes)}) for the ontology's classes "
+                          f"{list(ontology.classes)}, got {class_probs.shape}")
+    if olfactory.shape != class_probs.shape[:-1]:
+        raise _UsageError(f"--olfactory must have the map's shape {class_probs.shape[:-1]}, got {olfactory.shape}")
+    semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior)
+    posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
+    out = os.fspath(args.out)
+    try:
+        np.save(out, posterior)
+    except OSError as exc:
+        raise _UsageError(f"--out: cannot write {out!r} ({exc.strerror})") from None
+    best = np.unravel_index(int(np.argmax(posterior)), posterior.shape)
+    print(f"p(s | g, z) for {gas!r} over {posterior.size} cells -> {out}; most probable cell {tuple(map(int, best))} "
+          f"(p = {posterior[best]:.4g})")
+    return 0
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization.")
+    from .experiment import ESTIMATORS
+
+    parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
+                                     "Without a command: the demo.")
     sub = parser.add_subparsers(dest="command")
+    workers = min(2, os.cpu_count() or 1)
+
+    demo = sub.add_parser("demo", help="the validation experiment in small (≈ 15 s on 2 cores)")
+    demo.add_argument("--out", default="psgsl-demo", help="output directory (default: %(default)s)")
+    demo.add_argument("--seeds", type=_positive_int, default=None, help="number of seeds (default: 4)")
+    demo.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    demo.set_defaults(func=_demo)
+
+    exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
+    exp.add_argument("--sources", nargs="+", default=["oven", "bed", "5.0,6.0"],
+                     help="object class names or 'x,y' positions (default: %(default)s)")
+    exp.add_argument("--seeds", type=_positive_int, default=10, help="seeds 0..N-1 (default: %(default)s)")
+    exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
+                     help="olfactory estimators (default: both)")
+    exp.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
+    exp.add_argument("--quiet", action="store_true", help="no progress bar")
+    exp.set_defaults(func=_experiment)
+
+    est = sub.add_parser("estimate", help="fuse your own class beliefs and olfactory map: p(s | g, z)")
+    est.add_argument("--ontology", required=True, help="ontology YAML (see Ontology.from_yaml)")
+    est.add_argument("--class-probs", required=True, help=".npy (..., k): p(o_c | z_c) per cell")
+    est.add_argument("--olfactory", required=True, help=".npy (...): p(s | g) per cell")
+    est.add_argument("--gas", default=None, help="gas name (default: the ontology's only gas)")
+    est.add_argument("--out", required=True, help=".npy to write p(s | g, z) to")
+    est.set_defaults(func=_estimate)
+
     sub.add_parser("kitchen", help="the paper's kitchen example on six cells").set_defaults(func=_kitchen)
     return parser
 
 
 def main(argv=None) -> int:
+    """Entry point of ``psgsl``; returns the exit code (0 ok, 2 usage or input error)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # argparse prints usage + one line and exits 2 on bad syntax
     if args.command is None:
-        args = parser.parse_args(["kitchen"])
-    return args.func(args)
+        args = parser.parse_args(["demo"])
+    try:
+        return args.func(args)
+    except _UsageError as exc:
+        message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        print(f"psgsl {args.command}: error: {message}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover
