@@ -10,16 +10,19 @@ Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on fu
 * :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
 * :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
   φ_O(p) (Sec. "Information Gain Optimization");
-* :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts.
+* :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts;
+  :func:`kitchen_ontology`, :func:`kitchen_example` — the paper's kitchen example.
 
 Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian networks),
-``psgsl_pgm.sim`` (simulated house), ``psgsl_pgm.olfaction`` (olfactory estimators p(s | g)).
+``psgsl_pgm.sim`` (simulated house), ``psgsl_pgm.olfaction`` (olfactory estimators p(s | g)),
+``psgsl_pgm.experiment`` (the paper's validation experiment), ``psgsl_pgm.teaching`` (notebook helpers).
 """
 
 from ._beliefs import room_evidence, update_class_probs
 from ._fov import field_of_view, view_information_gain
 from ._fusion import fuse
 from ._infogain import semantic_information_gain
+from ._kitchen import kitchen_example
 from ._ontology import Ontology, kitchen_ontology
 from ._semantic import semantic_source_probability
 
@@ -29,6 +32,7 @@ __all__ = [
     "Ontology",
     "field_of_view",
     "fuse",
+    "kitchen_example",
     "kitchen_ontology",
     "room_evidence",
     "semantic_information_gain",

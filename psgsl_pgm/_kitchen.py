@@ -33,9 +33,18 @@ def kitchen_example() -> dict:
     Returns
     -------
     result : dict
-        ``cells`` (names), ``semantic`` p(s_c | z), ``olfactory`` p(s_c | g), ``fused`` p(s_c | g, z), each a
-        (6,) ndarray.
+        ``cells`` (names), ``class_probs`` (6, 5) p(o_c | z_c) over the ontology's classes, ``ontology``
+        (:func:`kitchen_ontology`), ``semantic`` p(s_c | z), ``olfactory`` p(s_c | g), ``fused`` p(s_c | g, z), each
+        a (6,) ndarray.
+
+    Examples
+    --------
+    >>> from psgsl_pgm import kitchen_example
+    >>> res = kitchen_example()
+    >>> res["cells"][0], round(float(res["fused"][0]), 4)
+    ('oven', 0.4633)
     """
     ont = kitchen_ontology()
     semantic = semantic_source_probability(BELIEFS, ont.source_likelihood("smoke"), ont.class_prior)
-    return {"cells": CELLS, "semantic": semantic, "olfactory": OLFACTORY, "fused": fuse(OLFACTORY, semantic)}
+    return {"cells": CELLS, "class_probs": BELIEFS.copy(), "ontology": ont, "semantic": semantic,
+            "olfactory": OLFACTORY.copy(), "fused": fuse(OLFACTORY, semantic)}
