@@ -49,7 +49,7 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
 
     runs = list(runs)
     if ax is None:
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     else:
         fig = ax.figure
     grid = np.linspace(0.0, 1.0, points)
@@ -67,7 +67,6 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
     ax.set_title(f"Source error, mean over {len(runs)} runs; bands ± std of p(s | ·)", fontsize=10)
     ax.legend(frameon=False)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
     return fig
 
 
@@ -95,7 +94,7 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
     if not steps:
         raise ValueError("the run has no snapshots: call run_search(..., snapshot_steps=[...])")
     fig, axes = plt.subplots(len(variants), len(steps), figsize=(2.3 * len(steps), 2.7 * len(variants)),
-                             squeeze=False)
+                             squeeze=False, layout="constrained")
     n = run.n_steps
     for i, name in enumerate(variants):
         v = VARIANTS.index(name)
@@ -108,7 +107,6 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
                 ax.plot(*run.position[s], "wo", ms=3)
             ax.plot(*run.source_xy, marker="*", color="red", ms=9, mec="white", mew=0.5)
     fig.suptitle("p(s | ·) during the search (dashed: robot path; star: true source)", fontsize=10)
-    fig.tight_layout()
     return fig
 
 
@@ -139,13 +137,13 @@ def plot_room_types(semantic_plain, semantic_rooms, house, *, source=None):
     """
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(7.5, 4.6))
+    fig, axes = plt.subplots(1, 2, figsize=(8.0, 4.6), layout="constrained")
     top = max(float(np.max(semantic_plain)), float(np.max(semantic_rooms)))  # one colour scale for both
     for ax, p, t in zip(axes, (semantic_plain, semantic_rooms),
                         ("(A) no previous information", "(B) room-category map")):
         im = _prob_map(ax, house, p, t, vmax=top)
         if source is not None:
             ax.plot(*source, marker="*", color="red", ms=9, mec="white", mew=0.5)
-    fig.colorbar(im, ax=list(axes), fraction=0.03, pad=0.02, label="p(s_c | ·)")
+    fig.colorbar(im, ax=list(axes), shrink=0.8, label="p(s_c | ·)")
     fig.suptitle("Source distribution at the start of the search", fontsize=10)
     return fig

@@ -40,20 +40,24 @@ def summarize(runs) -> dict:
     -------
     dict
         ``{"n_runs": n, "seeds": [...], "early_progress": 0.25, <variant>: {"early_error": {"mean", "ci95"},
-        "final_error": ..., "early_spread": ..., "final_spread": ...}, "paired": {...}}``. ``paired`` holds the
-        mean and CI of per-run *differences* (e.g. olfaction − semantics), which is the right test of "lower
-        than" when all variants share one observation stream.
+        "final_error": ..., "mean_error": ..., "early_spread": ..., "final_spread": ...}, "paired": {...}}``.
+        ``mean_error`` is the error averaged over the whole search (101 equally spaced progress points: the
+        area under the error curve, small when the error falls early). ``paired`` holds the mean and CI of
+        per-run *differences* (e.g. olfaction − semantics), which is the right test of "lower than" when all
+        variants share one observation stream.
     """
     runs = list(runs)
     if not runs:
         raise ValueError("summarize needs at least one run")
     err = aligned(runs, "error", [EARLY, 1.0])  # (runs, 2, 3)
     spr = aligned(runs, "spread", [EARLY, 1.0])
+    area = aligned(runs, "error", np.linspace(0.0, 1.0, 101)).mean(axis=1)  # (runs, 3)
     out = {"n_runs": len(runs), "seeds": sorted({r.seed for r in runs}), "early_progress": EARLY}
     for v, name in enumerate(VARIANTS):
         out[name] = {
             "early_error": mean_ci(err[:, 0, v]),
             "final_error": mean_ci(err[:, 1, v]),
+            "mean_error": mean_ci(area[:, v]),
             "early_spread": mean_ci(spr[:, 0, v]),
             "final_spread": mean_ci(spr[:, 1, v]),
         }
@@ -62,6 +66,7 @@ def summarize(runs) -> dict:
         f"{a} - {b}": {
             "early_error": mean_ci(err[:, 0, VARIANTS.index(a)] - err[:, 0, VARIANTS.index(b)]),
             "final_error": mean_ci(err[:, 1, VARIANTS.index(a)] - err[:, 1, VARIANTS.index(b)]),
+            "mean_error": mean_ci(area[:, VARIANTS.index(a)] - area[:, VARIANTS.index(b)]),
         }
         for a, b in pairs
     }
@@ -111,11 +116,12 @@ def _fmt(stat: dict) -> str:
 
 def format_table(summary: dict, *, title: str = "") -> str:
     """The summary as a plain-text table (metres; mean [95 % CI] over runs)."""
-    head = f"{'variant':<16} {'error at 1/4':>21} {'final error':>21} {'final spread':>21}"
+    head = (f"{'variant':<16} {'error at 1/4':>21} {'final error':>21} {'mean error':>21} "
+            f"{'final spread':>21}")
     lines = [title] if title else []
     lines += [f"{summary['n_runs']} runs (seeds {summary['seeds']}); metres, mean [95 % CI]", head, "-" * len(head)]
     for name in VARIANTS:
         s = summary[name]
         lines.append(f"{name:<16} {_fmt(s['early_error']):>21} {_fmt(s['final_error']):>21} "
-                     f"{_fmt(s['final_spread']):>21}")
+                     f"{_fmt(s['mean_error']):>21} {_fmt(s['final_spread']):>21}")
     return "\n".join(lines)

@@ -69,6 +69,9 @@ def test_summary_aligns_runs_of_different_length_by_search_progress(tmp_path):
         final = [r.error[-1, v] for r in runs]
         assert s[name]["early_error"] == mean_ci(early)
         assert s[name]["final_error"] == mean_ci(final)
+        grid = np.linspace(0, 1, 101)
+        area = [np.mean(np.interp(grid, np.arange(r.n_steps + 1) / r.n_steps, r.error[:, v])) for r in runs]
+        np.testing.assert_allclose(s[name]["mean_error"]["mean"], np.mean(area), rtol=1e-12)
     d = s["paired"]["olfaction - semantics"]["final_error"]
     assert d == mean_ci([r.error[-1, 0] - r.error[-1, 1] for r in runs])
     # a run with n = 8 has step 2 exactly at a quarter
