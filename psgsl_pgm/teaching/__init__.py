@@ -1,30 +1,26 @@
-"""Helpers of the teaching notebooks (``notebooks/01_…`` – ``06_…``): drawings, maps and small experiments.
+"""Helpers of the teaching notebooks (``notebooks/01_…`` – ``07_…``): drawings, maps and small experiments.
 
 Private to the notebooks (not part of the estimator's API); every function here is tested in
-``tests/teaching``:
+``tests/teaching``. (The ontology of the simulated house is the experiment's,
+:func:`psgsl_pgm.experiment.house_ontology`.)
 
 * :func:`draw_network` — a layered drawing of Network A or B (networkx + matplotlib);
 * :func:`plot_cell_map` — a map over the cells of a house grid (walls in black);
 * :func:`approximation_error` — mean total-variation error of the paper's approximation
   p(o_ni | s_c) ≈ p(o_ni) against the exact posterior, versus the number of cells;
-* :func:`house_ontology` — an ontology (p(o | s, γ), p(o), p(o | room)) for the simulated house, its room
-  table estimated by counting the classes in each room;
 * :func:`survey` — class beliefs after camera frames from a list of poses;
 * :func:`candidate_poses` — a lattice of camera poses on the free floor, for φ_O(p).
 """
 
 from ._approximation import approximation_error
 from ._graph import draw_network
-from ._house_ontology import HOUSE_GASES, house_ontology
 from ._maps import plot_cell_map
 from ._views import candidate_poses, survey
 
 __all__ = [
-    "HOUSE_GASES",
     "approximation_error",
     "candidate_poses",
     "draw_network",
-    "house_ontology",
     "plot_cell_map",
     "survey",
 ]

@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["_approximation", "_graph", "_house_ontology", "_maps", "_views"]
+MODULES = ["_approximation", "_graph", "_maps", "_views"]
 
 
 @pytest.mark.parametrize("name", MODULES)

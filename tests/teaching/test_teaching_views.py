@@ -1,4 +1,4 @@
-"""house_ontology (counts by hand), survey and candidate_poses on the default house."""
+"""survey and candidate_poses on the default house."""
 
 from __future__ import annotations
 
@@ -7,38 +7,12 @@ import pytest
 
 from psgsl_pgm import field_of_view
 from psgsl_pgm.sim import Camera, SemanticMap, default_house
-from psgsl_pgm.teaching import HOUSE_GASES, candidate_poses, house_ontology, survey
+from psgsl_pgm.teaching import candidate_poses, survey
 
 
 @pytest.fixture(scope="module")
 def house():
     return default_house(seed=0)
-
-
-def test_house_ontology_is_the_smoothed_class_frequency(house):
-    ont = house_ontology(house, concentration=0.5)
-    assert ont.classes == house.classes and ont.rooms == house.room_names
-    assert ont.gases == ("smoke", "ethanol")
-    k = len(house.classes)
-    free = house.grid.free
-    for r, room in enumerate(house.room_names):  # loops by hand, room by room and class by class
-        in_room = free & (house.room_labels == r)
-        counts = np.array([np.sum(in_room & (house.class_map == i)) for i in range(k)], dtype=float)
-        np.testing.assert_allclose(ont.room_likelihood(room), (counts + 0.5) / (counts.sum() + 0.5 * k),
-                                   rtol=1e-12)
-    total = np.array([np.sum(free & (house.class_map == i)) for i in range(k)], dtype=float)
-    np.testing.assert_allclose(ont.class_prior, (total + 0.5) / (total.sum() + 0.5 * k), rtol=1e-12)
-    for gas, row in HOUSE_GASES.items():
-        expected = np.array([row.get(c, 0.0) for c in house.classes])
-        np.testing.assert_array_equal(ont.source_likelihood(gas), expected)
-        assert abs(sum(row.values()) - 1.0) < 1e-12
-
-
-def test_house_ontology_bad_input(house):
-    with pytest.raises(TypeError, match="House"):
-        house_ontology("house")
-    with pytest.raises(ValueError, match="concentration"):
-        house_ontology(house, concentration=0.0)
 
 
 def test_survey_updates_only_the_cells_in_view(house):
