@@ -40,7 +40,8 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     seeds : iterable of int
     estimators : sequence of {"infotaxis", "pmfs"}
     out : path, keyword-only
-        Output directory; finished runs live in ``out/runs`` and are never redone (resumable).
+        Output directory; finished runs live in ``out/runs`` and are never redone (resumable); a stored run
+        with another configuration is an error, not silently mixed in.
     workers : int, keyword-only
         Worker processes (1 = run in this process).
     config : ExperimentConfig, optional, keyword-only
@@ -74,6 +75,10 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     for source, estimator, seed in itertools.product(sources, estimators, seeds):
         path = run_path(out, source, estimator, seed)
         if path.exists():
+            stored = load_run(path).config
+            if stored != config.to_dict():
+                raise ValueError(f"{path} was computed with another configuration ({stored}); use a new output "
+                                 "directory or delete the stored runs")
             continue
         jobs.append((source, seed, estimator, config, path, SNAPSHOTS if seed == first else ()))
     bar = tqdm(total=len(jobs), desc="search runs", unit="run", disable=not progress or not jobs)

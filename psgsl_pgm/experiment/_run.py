@@ -47,6 +47,8 @@ class RunResult:
         ‖E[s] − s_true‖ and the standard deviation √E‖s − E[s]‖² (m) for each variant of :data:`VARIANTS`.
     snapshots : dict
         ``{step: (3, H, W) ndarray}`` posteriors at the requested steps (for Fig. progression).
+    config : dict
+        The :class:`ExperimentConfig` of the run, as a dict.
     """
 
     source: str
@@ -59,6 +61,7 @@ class RunResult:
     error: np.ndarray
     spread: np.ndarray
     snapshots: dict = field(default_factory=dict)
+    config: dict = field(default_factory=dict)
 
     @property
     def n_steps(self) -> int:
@@ -191,4 +194,4 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         pos[j + 1], hits[j + 1] = stop, reading.hit
         record(j + 1)
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
-    return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps)
+    return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps, config.to_dict())

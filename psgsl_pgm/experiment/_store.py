@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -30,6 +31,7 @@ def save_run(result: RunResult, path) -> Path:
             fh, source=np.array(result.source), seed=np.array(result.seed), estimator=np.array(result.estimator),
             source_xy=result.source_xy, time=result.time, position=result.position, hit=result.hit,
             error=result.error, spread=result.spread, snapshot_steps=steps, snapshots=snaps,
+            config=np.array(json.dumps(result.config, sort_keys=True)),
         )
     os.replace(tmp, path)
     return path
@@ -43,6 +45,6 @@ def load_run(path) -> RunResult:
             steps = z["snapshot_steps"]
             snaps = {int(s): z["snapshots"][i] for i, s in enumerate(steps)}
             return RunResult(str(z["source"]), int(z["seed"]), str(z["estimator"]), z["source_xy"], z["time"],
-                             z["position"], z["hit"], z["error"], z["spread"], snaps)
+                             z["position"], z["hit"], z["error"], z["spread"], snaps, json.loads(str(z["config"])))
     except (OSError, KeyError, ValueError, EOFError) as exc:
         raise ValueError(f"{path} is not a run file written by psgsl ({exc})") from None

@@ -59,6 +59,14 @@ def test_experiment_is_resumable(demo_dir, monkeypatch, capsys):
     assert (demo_dir / "oven-infotaxis" / "error-chart.png").exists()
 
 
+def test_stored_runs_with_another_configuration_are_refused(demo_dir):
+    from psgsl_pgm.experiment import ExperimentConfig, run_experiment
+
+    with pytest.raises(ValueError, match="computed with another configuration"):
+        run_experiment(["oven"], [0], ["infotaxis"], out=demo_dir, config=ExperimentConfig(encounter_scale=1.0),
+                       progress=False)
+
+
 def test_estimate_on_user_arrays_equals_the_library(tmp_path):
     ont = kitchen_ontology()
     rng = np.random.default_rng(7)

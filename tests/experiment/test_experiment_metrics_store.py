@@ -41,7 +41,7 @@ def _fake_run(seed, n, rng):
     err = rng.uniform(0, 5, size=(n + 1, 3))
     return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), t, rng.uniform(0, 9, (n + 1, 2)),
                      rng.random(n + 1) < 0.2, err, rng.uniform(0, 2, size=(n + 1, 3)),
-                     {0: rng.dirichlet(np.ones(12), size=3).reshape(3, 3, 4)})
+                     {0: rng.dirichlet(np.ones(12), size=3).reshape(3, 3, 4)}, {"gas": "smoke", "speed": 0.25})
 
 
 def test_run_files_round_trip_and_bad_files_are_named(tmp_path):
@@ -51,6 +51,7 @@ def test_run_files_round_trip_and_bad_files_are_named(tmp_path):
     for name in ("source_xy", "time", "position", "hit", "error", "spread"):
         np.testing.assert_array_equal(getattr(back, name), getattr(run, name))
     assert (back.source, back.seed, back.estimator) == ("oven", 4, "infotaxis")
+    assert back.config == {"gas": "smoke", "speed": 0.25}
     np.testing.assert_array_equal(back.snapshots[0], run.snapshots[0])
     assert not list((tmp_path / "runs").glob("*.part"))
     bad = tmp_path / "bad.npz"
