@@ -76,7 +76,7 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
     Parameters
     ----------
     run : RunResult
-        With ``snapshots`` (see ``run_search(snapshot_steps=...)``).
+        With ``snapshots`` (see ``run_search(snapshot_at=...)``).
     house : psgsl_pgm.sim.House
         The run's house (``default_house(run.seed)``).
     tour : Tour
@@ -92,7 +92,7 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
 
     steps = sorted(run.snapshots)
     if not steps:
-        raise ValueError("the run has no snapshots: call run_search(..., snapshot_steps=[...])")
+        raise ValueError("the run has no snapshots: call run_search(..., snapshot_at=[...])")
     fig, axes = plt.subplots(len(variants), len(steps), figsize=(2.3 * len(steps), 2.7 * len(variants)),
                              squeeze=False, layout="constrained")
     n = run.n_steps
