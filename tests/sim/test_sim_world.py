@@ -1,8 +1,6 @@
 """The World on one clock (readings, reproducibility, initial beliefs), the public API, and the docstring
 examples of psgsl_pgm.sim."""
 
-import doctest
-import importlib
 
 import numpy as np
 import pytest
@@ -76,14 +74,3 @@ def test_public_names():
     assert sorted(sim.__all__) == sorted(set(sim.__all__))
     for name in sim.__all__:
         assert getattr(sim, name) is not None
-
-
-MODULES = ["_classes", "_gridmap", "_house", "_los", "_filaments", "_sensors", "_semantic_map", "_world"]
-
-
-@pytest.mark.parametrize("name", MODULES)
-def test_docstring_examples(name):
-    module = importlib.import_module(f"psgsl_pgm.sim.{name}")
-    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
-    assert result.attempted > 0
-    assert result.failed == 0
