@@ -102,22 +102,12 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
             ax = axes[i, j]
             _prob_map(ax, house, run.snapshots[s][v], f"{name}, {100 * s / n:.0f} %")
             if s > 0:
-                reached = tour.path[: _path_index(tour, s)]
+                reached = tour.path[: tour.path_index[s - 1] + 1]  # up to stop s (1-based steps)
                 ax.plot(reached[:, 0], reached[:, 1], "w--", lw=0.8)
                 ax.plot(*run.position[s], "wo", ms=3)
             ax.plot(*run.source_xy, marker="*", color="red", ms=9, mec="white", mew=0.5)
     fig.suptitle("p(s | ·) during the search (dashed: robot path; star: true source)", fontsize=10)
     return fig
-
-
-def _path_index(tour, step):
-    """Index into ``tour.path`` of stop ``step`` (1-based; stops lie on the path)."""
-    stop = tour.stops[step - 1]
-    d = np.linalg.norm(tour.path - stop, axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(tour.path, axis=0), axis=1))])
-    on = np.flatnonzero(d < 1e-9)
-    # the stop's occurrence closest in arc length to the stop's travelled distance
-    return int(on[np.argmin(np.abs(arc[on] - tour.distance[step - 1]))]) + 1
 
 
 def plot_room_types(semantic_plain, semantic_rooms, house, *, source=None):

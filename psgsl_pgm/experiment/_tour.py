@@ -42,6 +42,8 @@ class Tour:
         Path length travelled when reaching each stop, metres.
     waypoint : (n,) ndarray of bool
         Whether the stop is a waypoint (look-around stop).
+    path_index : (n,) ndarray of int
+        Index of each stop in ``path``.
     """
 
     stops: np.ndarray
@@ -49,6 +51,7 @@ class Tour:
     path: np.ndarray
     distance: np.ndarray
     waypoint: np.ndarray
+    path_index: np.ndarray
 
     def __len__(self) -> int:
         return len(self.stops)
@@ -152,40 +155,33 @@ def exploration_tour(house, *, start=(0.8, 6.0), waypoint_spacing: float = 1.6, 
                 dist = ndi.distance_transform_edt(area)
                 pts = np.array([np.unravel_index(int(np.argmax(dist)), area.shape)])
             areas.append(idx[pts[:, 0], pts[:, 1]])
-    # order: nearest unvisited area, then its waypoints nearest-first (geodesic)
+    # order: nearest unvisited area, then its waypoints nearest-first; one geodesic solve per waypoint
     current = int(idx[start_rc])
-    order = [current]
-    remaining = list(range(len(areas)))
-    while remaining:
-        d = dijkstra(graph, indices=current)
-        nearest = min(remaining, key=lambda a: d[areas[a]].min())
-        remaining.remove(nearest)
-        todo = list(areas[nearest])
-        while todo:
-            d = dijkstra(graph, indices=current)
-            nxt = min(todo, key=lambda v: d[v])
-            todo.remove(nxt)
-            if nxt != current:
-                order.append(int(nxt))
-                current = int(nxt)
-    cells_of = np.argwhere(nav)  # node id -> (row, col), same order as idx
-    nodes, is_wp = [order[0]], [True]
-    for a, b in zip(order[:-1], order[1:]):
-        _, pred = dijkstra(graph, indices=a, return_predecessors=True)
-        seg = _path(pred, b)[1:]
+    nodes, is_wp = [current], [True]
+    remaining, todo = list(range(len(areas))), []
+    while remaining or todo:
+        d, pred = dijkstra(graph, indices=current, return_predecessors=True)
+        if not todo:
+            nearest = min(remaining, key=lambda a: d[areas[a]].min())
+            remaining.remove(nearest)
+            todo = list(areas[nearest])
+        nxt = int(min(todo, key=lambda v: d[v]))
+        todo.remove(nxt)
+        if nxt == current:
+            continue
+        seg = _path(pred, nxt)[1:]
         nodes.extend(seg)
         is_wp.extend([False] * (len(seg) - 1) + [True])
+        current = nxt
+    cells_of = np.argwhere(nav)  # node id -> (row, col), same order as idx
     path = grid.cell_to_world(cells_of[np.array(nodes)])
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
     is_wp = np.array(is_wp)
     # stops: every stop_spacing of arc length, plus every waypoint
     marks = np.floor(arc / stop_spacing + 1e-9)
-    take = np.concatenate([[True], marks[1:] > marks[:-1]]) | is_wp
-    keep = np.flatnonzero(take)
-    stops, dist, wp = path[keep], arc[keep], is_wp[keep]
-    headings = []
-    for j, p in enumerate(stops):
-        nxt = stops[min(j + 1, len(stops) - 1)] if j + 1 < len(stops) else p + (p - stops[j - 1])
-        travel = float(np.arctan2(nxt[1] - p[1], nxt[0] - p[0]))
-        headings.append(travel + np.arange(4) * (np.pi / 2) if wp[j] else np.array([travel]))
-    return Tour(stops=stops, headings=tuple(headings), path=path, distance=dist, waypoint=wp)
+    keep = np.flatnonzero(np.concatenate([[True], marks[1:] > marks[:-1]]) | is_wp)
+    stops, wp = path[keep], is_wp[keep]
+    ahead = np.vstack([stops[1:], 2 * stops[-1:] - stops[-2:-1]])  # the next stop (past the last: straight on)
+    travel = np.arctan2(ahead[:, 1] - stops[:, 1], ahead[:, 0] - stops[:, 0])
+    headings = tuple(t + np.arange(4) * (np.pi / 2) if w else np.array([t]) for t, w in zip(travel, wp))
+    return Tour(stops=stops, headings=headings, path=path, distance=arc[keep], waypoint=wp, path_index=keep)

@@ -13,7 +13,8 @@ from psgsl_pgm.sim import make_world
 
 
 def _short(tour: Tour, n: int) -> Tour:
-    return Tour(tour.stops[:n], tour.headings[:n], tour.path, tour.distance[:n], tour.waypoint[:n])
+    return Tour(tour.stops[:n], tour.headings[:n], tour.path, tour.distance[:n], tour.waypoint[:n],
+                tour.path_index[:n])
 
 
 @pytest.fixture(scope="module")

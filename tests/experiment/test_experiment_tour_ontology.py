@@ -32,6 +32,7 @@ def test_tour_is_a_connected_collision_free_path_with_regular_stops(house, tour)
     gaps = np.diff(tour.distance)
     assert gaps.min() > 0 and gaps.max() <= 0.5 + np.sqrt(2) * res + 1e-9  # a stop every 0.5 m of path
     assert len(tour.headings) == len(tour) == len(tour.waypoint) == len(tour.distance)
+    np.testing.assert_array_equal(tour.path[tour.path_index], tour.stops)
     assert all(len(h) == (4 if w else 1) for h, w in zip(tour.headings, tour.waypoint))
 
 
