@@ -14,6 +14,8 @@ VARIANTS = ("olfaction", "semantics", "semantics+rooms")
 #: Olfactory estimators p(s | g) the experiment can run.
 ESTIMATORS = ("infotaxis", "pmfs")
 
+_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate"})
+
 
 @dataclass(frozen=True)
 class ExperimentConfig:
@@ -57,9 +59,8 @@ class ExperimentConfig:
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not np.isfinite(v):
                 raise ValueError(f"{f.name} must be a finite number, got {v!r}")
-            low_ok = v >= 0 if f.name in ("warm_up", "turn_time", "false_hit_rate") else v > 0
-            if not low_ok:
-                raise ValueError(f"{f.name} must be {'>= 0' if f.name in ('warm_up', 'turn_time', 'false_hit_rate') else '> 0'}, got {v!r}")
+            if v < 0 or (v == 0 and f.name not in _MAY_BE_ZERO):
+                raise ValueError(f"{f.name} must be {'>= 0' if f.name in _MAY_BE_ZERO else '> 0'}, got {v!r}")
         if not self.tempering <= 1 or not self.false_hit_rate < 1:
             raise ValueError(f"need tempering in (0, 1] and false_hit_rate in [0, 1), got {self.tempering!r}, "
                              f"{self.false_hit_rate!r}")
