@@ -209,14 +209,15 @@ class GridGeometry:
         return cls(grid_map.occupancy, resolution=grid_map.resolution, origin=grid_map.origin, outlets=outlets)
 
 
-def positive(value, name: str) -> float:
-    """A positive finite number (bools and strings refused)."""
+def positive(value, name: str, unit: str = "") -> float:
+    """A positive finite number (bools and strings refused); ``unit`` is named in the messages."""
+    where = f" in {unit}" if unit else ""
     if isinstance(value, (bool, str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a positive number, got {value!r}")
+        raise TypeError(f"{name} must be a positive number{where}, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a positive number, got {value!r}") from None
+        raise TypeError(f"{name} must be a positive number{where}, got {value!r}") from None
     if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+        raise ValueError(f"{name} must be a positive finite number{where}, got {value!r}")
     return v

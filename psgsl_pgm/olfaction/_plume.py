@@ -14,24 +14,12 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from ._grid import GridGeometry, as_wind_field
+from ._grid import GridGeometry, as_wind_field, positive
 from ._operator import advection_diffusion_operator
 
 __all__ = ["PlumeModel"]
 
 _SOLVE_CHUNK = 64  # adjoint right-hand sides solved together
-
-
-def _positive_float(value, name: str, unit: str) -> float:
-    if isinstance(value, (bool, str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a positive number in {unit}, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a positive number in {unit}, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number in {unit}, got {value!r}")
-    return v
 
 
 def _as_rng(rng) -> np.random.Generator:
@@ -112,9 +100,9 @@ class PlumeModel:
     ):
         self.geometry = GridGeometry(occupancy, resolution=resolution, origin=origin, outlets=outlets)
         self.wind = as_wind_field(wind, self.geometry.shape, self.geometry.free)
-        self.diffusivity = _positive_float(diffusivity, "diffusivity", "m²/s")
-        self.lifetime = _positive_float(lifetime, "lifetime", "s")
-        self.encounter_scale = _positive_float(encounter_scale, "encounter_scale", "m²/s")
+        self.diffusivity = positive(diffusivity, "diffusivity", "m²/s")
+        self.lifetime = positive(lifetime, "lifetime", "s")
+        self.encounter_scale = positive(encounter_scale, "encounter_scale", "m²/s")
         if isinstance(cache_size, bool) or not isinstance(cache_size, (int, np.integer)) or cache_size < 0:
             raise ValueError(f"cache_size must be a non-negative integer, got {cache_size!r}")
         self.cache_size = int(cache_size)
