@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from olfaction_maps import lattice_stops
 
 from psgsl_pgm.olfaction import GridInfotaxis, PlumeModel, PMFSEstimator, fit_encounter_scale
 
@@ -21,16 +22,9 @@ if not hasattr(sim, "default_house"):
 
 def _stops(house, step=5, margin=1):
     """Robot stops every ``step`` cells, at least ``margin`` cells from walls, furniture and windows."""
-    blocked = house.robot_obstacles
-    h, w = blocked.shape
-    pad = np.pad(blocked, margin, constant_values=True)
-    near = np.zeros_like(blocked)
-    for dr in range(-margin, margin + 1):
-        for dc in range(-margin, margin + 1):
-            near |= pad[margin + dr : margin + dr + h, margin + dc : margin + dc + w]
-    rr, cc = np.mgrid[step // 2 : h : step, step // 2 : w : step]
-    keep = ~near[rr, cc]
-    return house.grid.cell_to_world(np.stack([rr[keep], cc[keep]], axis=-1))
+    g = house.grid
+    return lattice_stops(house.robot_obstacles, step=step, resolution=g.resolution, margin=margin,
+                         origin=g.origin)
 
 
 def _err(xy, source):
