@@ -28,12 +28,22 @@ from ._semantic import semantic_source_probability
 
 __version__ = "0.1.0"
 
+
+def load_world(path):
+    """Load a world file (a user's house: map, rooms, objects, ontology, wind, sources); see
+    :func:`psgsl_pgm.sim.load_world`. Needs the ``sim`` extra."""
+    from .sim import load_world as _load_world
+
+    return _load_world(path)
+
+
 __all__ = [
     "Ontology",
     "field_of_view",
     "fuse",
     "kitchen_example",
     "kitchen_ontology",
+    "load_world",
     "room_evidence",
     "semantic_information_gain",
     "semantic_source_probability",

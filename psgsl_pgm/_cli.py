@@ -1,6 +1,6 @@
 """Command line: ``psgsl`` (or ``python -m psgsl_pgm``).
 
-``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``. Usage errors and
+``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``, ``world check``. Usage errors and
 bad input files give a one-line message and exit code 2, never a traceback.
 """
 
@@ -124,6 +124,7 @@ def _positive_int(text):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import _cli_world
     from .experiment import ESTIMATORS
 
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
@@ -158,6 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
     est.set_defaults(func=_estimate)
 
     sub.add_parser("kitchen", help="the paper's kitchen example on six cells").set_defaults(func=_kitchen)
+    _cli_world.add_parser(sub)
     return parser
 
 

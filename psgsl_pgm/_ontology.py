@@ -199,21 +199,51 @@ class Ontology:
         return out
 
     @classmethod
-    def from_yaml(cls, path) -> "Ontology":
-        """Read the YAML layout of :meth:`from_dict`; errors name the file."""
+    def from_yaml(cls, path, *, room_classes=None) -> "Ontology":
+        """Read an ontology file: this project's layout (:meth:`from_dict`) or the lab's (top-level ``Gases``).
+
+        The lab's layout (MAPIRlab ``ontology.yaml``: ``Gases: [{gas, probs: {class: p, ..., other: p}}]``) is
+        read as the lab's code reads it — values normalised per gas, ``other`` the catch-all of every class the
+        gas does not list; see :mod:`psgsl_pgm._ontology_lab`. Class names of the lab layout go through the COCO
+        alias table (:func:`psgsl_pgm._coco.canonical_class`).
+
+        Parameters
+        ----------
+        path : str or Path
+        room_classes : str or Path, optional, keyword-only
+            The lab's ``ObjectProbByRoom.yaml`` (``number_classes``, ``room_categories``): p(o | room) for the
+            rooms it lists (rooms it does not list get the class prior when beliefs are built from a room map)
+            and, for a lab-layout ontology, the class prior 1 / number_classes. With this project's layout the
+            file's ``class_prior`` is kept and the file must not have ``rooms`` of its own.
+
+        Raises
+        ------
+        ValueError
+            Unreadable or malformed files, duplicate keys, unknown or missing keys, bad numbers — the message
+            starts with the file and names the key.
+        """
         path = Path(path)
+        data = _read_yaml(path, "ontology")
+        room_data = None if room_classes is None else _read_yaml(Path(room_classes), "room-classes")
+        from ._ontology_lab import is_lab_format, lab_ontology, lab_room_table
+
+        if is_lab_format(data):
+            try:
+                args = lab_ontology(data, str(path), room_data=room_data, room_where=str(room_classes))
+                return cls(args.pop("classes"), args.pop("gases"), args.pop("source_table"), **args)
+            except (ValueError, TypeError) as exc:
+                msg = str(exc)
+                raise type(exc)(msg if msg.startswith((str(path), str(room_classes))) else f"{path}: {msg}") from None
         try:
-            text = path.read_text()
-        except OSError as exc:
-            raise ValueError(f"cannot read ontology file {path}: {exc.strerror or exc}") from None
-        try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError as exc:
-            raise ValueError(f"malformed YAML in ontology file {path}: {exc}") from None
-        try:
-            return cls.from_dict(data)
+            ont = cls.from_dict(data)
         except (ValueError, TypeError) as exc:
             raise type(exc)(f"{path}: {exc}") from None
+        if room_data is None:
+            return ont
+        if ont.rooms:
+            raise ValueError(f"{path}: key 'rooms' is given, and so is the room-classes file {room_classes}; use one")
+        _, rooms, table = lab_room_table(ont.classes, room_data, str(room_classes))
+        return cls(ont.classes, ont.gases, ont.source_table, ont.class_prior, rooms=rooms, room_table=table)
 
     def to_yaml(self, path=None):
         """Write to ``path`` (or return the YAML text when ``path`` is None)."""
@@ -267,6 +297,19 @@ class Ontology:
         if rooms is not None:
             data["rooms"] = rooms
         return cls.from_dict(data)
+
+
+def _read_yaml(path: Path, what: str):
+    """The parsed YAML document of an ontology file; every failure a ValueError naming the file."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise ValueError(f"cannot read {what} file {path}: {reason}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ValueError(f"malformed YAML in {what} file {path}: {' '.join(str(exc).split())}") from None
 
 
 def kitchen_ontology() -> Ontology:

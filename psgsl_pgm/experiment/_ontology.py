@@ -31,14 +31,15 @@ def _cached(seeds: tuple, pseudo_count: float) -> Ontology:
         np.add.at(counts, (h.room_labels[inside], h.class_map[inside]), 1.0)
     room_table = (counts + pseudo_count) / (counts + pseudo_count).sum(axis=1, keepdims=True)  # p(o | room)
     class_prior = (counts.sum(axis=0) + pseudo_count) / (counts.sum() + k * pseudo_count)  # β = p(o | ¬s) ≈ p(o)
-    text = resources.files("psgsl_pgm").joinpath("data/house_gases.yaml").read_text(encoding="utf-8")
-    gases = yaml.safe_load(text)
-    index = {c: i for i, c in enumerate(classes)}
-    table = np.zeros((len(gases), k))
-    for g, (gas, row) in enumerate(gases.items()):
-        for name, value in row.items():
-            table[g, index[name]] = float(value)
-    return Ontology(classes, list(gases), table, class_prior, rooms=rooms, room_table=room_table)
+    # p(o | s, γ) from the hand-written table, read by the Ontology's own reader (a typo names the file and key)
+    path = resources.files("psgsl_pgm").joinpath("data/house_gases.yaml")
+    text = path.read_text(encoding="utf-8")
+    try:
+        hand = Ontology.from_dict({"classes": list(classes), "gases": yaml.safe_load(text)})
+    except (ValueError, TypeError) as exc:
+        raise type(exc)(f"{path}: {exc}") from None
+    table, gases = hand.source_table, hand.gases
+    return Ontology(classes, gases, table, class_prior, rooms=rooms, room_table=room_table)
 
 
 def house_ontology(*, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0) -> Ontology:

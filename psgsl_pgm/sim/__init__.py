@@ -9,14 +9,16 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
 * gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensor and anemometer models;
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
-* :func:`make_world` — all of it on one clock for the experiment.
+* :func:`make_world` — all of it on one clock for the experiment;
+* :func:`load_world` — a user's house from a world file (map, rooms, objects, ontology, wind, sources); the
+  embedded house is the world :func:`default_world`.
 
 Modelling choice: walls block wind, gas, the camera and the robot; furniture is low, so wind, gas and the
 camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`).
 """
 
 from ._camera import Camera, Frame, take_frame
-from ._cfd import read_gaden_wind_csv
+from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
 from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
@@ -31,6 +33,7 @@ from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
+from ._worldfile import WorldSpec, default_world, load_world, navigable
 
 __all__ = [
     "Anemometer",
@@ -54,19 +57,24 @@ __all__ = [
     "WindField",
     "WindSequence",
     "World",
+    "WorldSpec",
     "box_footprint",
     "cells_clear",
     "default_house",
+    "default_world",
     "load_objects",
+    "load_world",
     "load_ros_map",
     "load_room_map",
     "make_wind",
     "make_world",
     "match_names",
+    "navigable",
     "plot_house",
     "potential_flow",
     "read_gaden_config",
     "read_gaden_wind_csv",
+    "read_gaden_wind_snapshots",
     "reindex",
     "save_objects",
     "save_ros_map",

@@ -2,22 +2,25 @@
 
 GADEN's preprocessing reads OpenFOAM results exported from ParaView as CSV with a header naming the columns,
 among them ``"U:0","U:1","U:2"`` (velocity, m/s) and ``"Points:0","Points:1","Points:2"`` (position, m), in
-any order and possibly with others (``"p"``, ``"k"``, ...). Here the points within a horizontal slab around a
-height are kept and every free cell of the grid takes the (u, v) of the nearest of them.
+any order and possibly with others (``"p"``, ``"k"``, ...). ParaView versions differ in whether the header
+carries units: ``"U:0"`` and ``"U [m/s]:0"`` (``"Points [m]:0"``) are the same column here. Here the points
+within a horizontal slab around a height are kept and every free cell of the grid takes the (u, v) of the nearest
+of them. Several files are time snapshots (:func:`read_gaden_wind_snapshots`).
 """
 
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._gridmap import GridMap
-from ._wind import WindField
+from ._wind import WindField, WindSequence
 
-__all__ = ["read_gaden_wind_csv"]
+__all__ = ["read_gaden_wind_csv", "read_gaden_wind_snapshots"]
 
 _COLUMNS = ("U:0", "U:1", "U:2", "Points:0", "Points:1", "Points:2")
 
@@ -64,7 +67,8 @@ def read_gaden_wind_csv(path, *, like: GridMap, height: float, slab: float | Non
     with p.open(newline="") as fh:
         reader = csv.reader(fh)
         try:
-            header = [h.strip().strip('"') for h in next(reader)]
+            raw = next(reader)
+            header = [_column(h) for h in raw]
         except StopIteration:
             raise ValueError(f"{p}: empty file, expected a header with columns {list(_COLUMNS)}") from None
         missing = [c for c in _COLUMNS if c not in header]
@@ -82,6 +86,10 @@ def read_gaden_wind_csv(path, *, like: GridMap, height: float, slab: float | Non
             except ValueError:
                 bad = next(c for c, i in zip(_COLUMNS, cols) if not _is_float(row[i]))
                 raise ValueError(f"{p}: line {line}, column '{bad}': not a number: {row[header.index(bad)]!r}") from None
+    if len(set(header)) != len(header):
+        dup = sorted({h for h in header if header.count(h) > 1} & set(_COLUMNS))
+        if dup:
+            raise ValueError(f"{p}: column(s) {dup} appear twice in the header {raw}")
     data = np.array(rows, dtype=np.float64).reshape(-1, 6)
     if not np.all(np.isfinite(data)):
         line = int(np.argwhere(~np.isfinite(data))[0, 0]) + 2
@@ -100,6 +108,38 @@ def read_gaden_wind_csv(path, *, like: GridMap, height: float, slab: float | Non
     uv[dist > max_distance] = 0.0
     vel[like.free] = uv
     return WindField(like, vel)
+
+
+def read_gaden_wind_snapshots(paths, *, like: GridMap, height: float, period: float = 1.0,
+                              slab: float | None = None, max_distance: float | None = None) -> WindSequence:
+    """Several GADEN/ParaView CSVs (one per time step, in order) as piecewise-constant wind snapshots.
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        One CSV per snapshot (see :func:`read_gaden_wind_csv`); at least one.
+    like, height, slab, max_distance
+        As :func:`read_gaden_wind_csv`, for every file.
+    period : float, keyword-only
+        Seconds each snapshot holds (GADEN's wind time step); the sequence loops after the last one.
+
+    Returns
+    -------
+    WindSequence
+    """
+    files = [paths] if isinstance(paths, (str, Path)) else list(paths)
+    if not files:
+        raise ValueError("paths must name at least one GADEN wind CSV")
+    if not (np.isfinite(period) and period > 0):
+        raise ValueError(f"period must be a positive number of seconds, got {period!r}")
+    snaps = tuple(read_gaden_wind_csv(f, like=like, height=height, slab=slab, max_distance=max_distance)
+                  for f in files)
+    return WindSequence(snaps, float(period))
+
+
+def _column(name: str) -> str:
+    """Header cell without quotes and units: ``'"U [m/s]:0"'`` -> ``'U:0'``."""
+    return re.sub(r"\s*\[[^\]]*\]", "", name.strip().strip('"')).strip()
 
 
 def _is_float(s: str) -> bool:

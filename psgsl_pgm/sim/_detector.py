@@ -119,8 +119,8 @@ class DetectorModel:
             rest = [x for x in range(m) if x != j and x not in mates]
             if rest:
                 conf[i, rest] = leak / len(rest)
-            if mates:
-                conf[i, mates] = (1.0 - correct - leak) / len(mates)
+            if mates:  # without labels outside the group, the leak stays within it
+                conf[i, mates] = (1.0 - correct - (leak if rest else 0.0)) / len(mates)
                 conf[i, j] = correct
             else:
                 conf[i, j] = 1.0 - (leak if rest else 0.0)

@@ -139,7 +139,8 @@ class World:
 def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean_speed: float = 0.2,
                perturbation: float = 0.3, params: FilamentParams | None = None, warm_up: float = 60.0,
                duration: float = 600.0, camera: Camera | None = None, detector: DetectorModel | None = None,
-               gas_sensor: GasSensor | None = None, anemometer: Anemometer | None = None) -> World:
+               gas_sensor: GasSensor | None = None, anemometer: Anemometer | None = None,
+               wind: WindSequence | None = None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
 
     Parameters
@@ -159,6 +160,9 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         Seconds of wind snapshots before they loop.
     camera, detector, gas_sensor, anemometer : optional, keyword-only
         Defaults: ``Camera()``, ``DetectorModel.default(house.classes)``, ``GasSensor()``, ``Anemometer()``.
+    wind : WindSequence, optional, keyword-only
+        Given wind snapshots (e.g. a GADEN CFD export) instead of :func:`make_wind` between the house's windows
+        (``mean_speed`` and ``perturbation`` are then unused); on the house's grid.
 
     Returns
     -------
@@ -186,8 +190,11 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                              f"{sorted({o.class_name for o in house.objects})}")
         source_object = objs[0]
         source = source_object.center
-    wind = make_wind(house.grid, house.inlet, house.outlet, mean_speed=mean_speed, perturbation=perturbation,
-                     duration=duration, seed=wind_seed)
+    if wind is None:
+        wind = make_wind(house.grid, house.inlet, house.outlet, mean_speed=mean_speed, perturbation=perturbation,
+                         duration=duration, seed=wind_seed)
+    elif not isinstance(wind, WindSequence) or wind.grid.shape != house.grid.shape:
+        raise ValueError(f"wind must be a WindSequence on the house's {house.grid.shape} grid, got {wind!r}")
     gas = FilamentModel(house.grid, wind, source, params=params, outlet=house.outlet, seed=gas_seed)
     world = World(
         house, wind, gas,

@@ -1,0 +1,522 @@
+"""World files: a user's house (map, rooms, objects, ontology, wind, start, sources) in one YAML file.
+
+A world file names the files a GSL lab already has; relative paths resolve against the world file's folder::
+
+    map: house.yaml              # ROS map_server YAML + PGM/PNG (resolution, origin, negate, thresholds)
+    resolution: 0.1              # working cell size (default: the map's): a coarse cell is occupied when any
+                                 # fine cell is, rooms by majority; must be a whole multiple of the map's cells
+    rooms: roomMasks.yaml        # one mask image per category, or a segmented image + grey-level table
+    objects: objects.yaml        # optional: object list (psgsl_pgm.sim.load_objects)
+    ontology: ontology.yaml      # this project's format or the lab's (top-level Gases)
+    room_classes: ObjectProbByRoom.yaml   # optional: the lab's p(o | room)
+    gas: smoke                   # optional: target gas (default: the experiment's, else the ontology's first)
+    source_region: rooms         # where a source may be: rooms (default), free, or a mask image (white = may)
+    semantic_map: beliefs.npz    # optional: a mapper's class beliefs instead of the simulated camera
+                                 # (.npy/.npz dense beliefs or Voxeland's instance-map JSON)
+    wind:                        # potential flow between windows ...
+      speed: 0.2                 # mean speed, m/s
+      perturbation: 0.3          # optional: slow eddies, fraction of speed (default 0.3)
+      windows:
+        - {role: inlet,  from: [-7.15, 3.42], to: [-5.65, 3.42]}   # optional width: m (default 0.15)
+        - {role: outlet, from: [-1.70, -7.88], to: [-0.25, -7.88]}
+      # ... or GADEN's CFD export: gaden_csv: [w_0.csv, w_1.csv], height: 0.5, period: 1.0 (s per snapshot);
+      #     windows are then optional (outlets still let filaments leave)
+    start: [-3.0, -3.3]          # robot start; default: the navigable cell nearest the map's centre
+    sources: {B1: [-0.60, 1.95], oven: oven}   # named positions (m) or an object class
+
+Object classes are matched to the ontology's through the COCO alias table (``fridge`` = ``refrigerator``);
+an object whose class the ontology does not list is an ``other`` for the semantic term (the lab's rule), and
+keeps its own class name for drawing and for ``sources``.
+
+The embedded house is the world file ``psgsl_pgm/data/worlds/house.yaml`` (``builtin: default_house``: the
+floor plan is generated per seed, ``ontology: house`` is :func:`psgsl_pgm.experiment.house_ontology`), so the
+experiment has one code path.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .._coco import canonical_class
+from ._fileio import check_keys, number, number_list, read_grey_image, read_yaml_mapping, resolve
+from ._gridmap import GridMap
+from ._house import House, default_house, segment_mask
+from ._objects import SceneObject, load_objects
+from ._resample import coarsen_factor, coarsen_labels, coarsen_occupancy
+from ._roommap import load_room_map
+from ._rosmap import load_ros_map
+
+__all__ = ["WorldSpec", "default_world", "load_world", "navigable"]
+
+_KEYS = ("map", "resolution", "rooms", "objects", "ontology", "room_classes", "gas", "source_region",
+         "semantic_map", "wind", "start", "sources", "builtin", "clearance")
+_WIND_POTENTIAL = ("speed", "perturbation", "windows")
+_WIND_GADEN = ("gaden_csv", "height", "period", "windows")
+_REGIONS = ("rooms", "free")
+
+
+def navigable(house: House, clearance: float = 0.25) -> np.ndarray:
+    """(H, W) bool: free cells at least ``clearance`` metres from walls, furniture and windows (the tour's rule)."""
+    from scipy import ndimage as ndi
+
+    blocked = house.robot_obstacles
+    return ~blocked & (ndi.distance_transform_edt(~blocked) * house.grid.resolution > clearance)
+
+
+@dataclass(frozen=True, eq=False)
+class WorldSpec:
+    """A loaded world file (see the module docstring); :meth:`house` and :meth:`make_world` build the simulation.
+
+    Attributes
+    ----------
+    path : Path
+        The world file.
+    ontology : psgsl_pgm.Ontology
+    gas : str or None
+        Target gas named by the file.
+    wind : dict
+        ``{"kind": "potential", "speed", "perturbation"}`` or ``{"kind": "gaden", "sequence": WindSequence}``.
+    start : (2,) ndarray or None
+        Robot start (None: the house's default, see :meth:`start_for`).
+    sources : dict
+        Name -> object class (str) or (x, y) position.
+    source_region : str or (H, W) ndarray of bool
+        ``"rooms"``, ``"free"`` or a mask on the working grid.
+    class_beliefs : (H, W, k) or (H, W, L, k) ndarray or None
+        A mapper's class beliefs in the ontology's class order (``semantic_map``).
+    windows : tuple of dict
+        The declared windows (role, from, to, width), for summaries and figures.
+    """
+
+    path: Path
+    ontology: object
+    gas: str | None
+    wind: dict
+    start: np.ndarray | None
+    sources: dict
+    source_region: object
+    class_beliefs: np.ndarray | None
+    windows: tuple
+    fixed_house: House | None = None
+    builtin: str | None = None
+    clearance: float = 0.25
+    object_classes: tuple = ()
+    map_path: Path | None = None
+    _notes: dict = field(default_factory=dict, repr=False)
+
+    # --- the house ---------------------------------------------------------------------------------------
+    def house(self, seed: int = 0) -> House:
+        """The house of run ``seed`` (a file-defined house is the same for every seed)."""
+        if self.fixed_house is not None:
+            return self.fixed_house
+        return default_house(int(seed))
+
+    def start_for(self, house: House) -> np.ndarray:
+        """(2,) robot start: the file's ``start``, else the navigable cell nearest the map's centre."""
+        if self.start is not None:
+            return self.start.copy()
+        nav = navigable(house, self.clearance)
+        if not nav.any():
+            raise ValueError(f"{self.path}: the map has no navigable cell (free, {self.clearance} m from obstacles)")
+        x0, x1, y0, y1 = house.grid.extent
+        centres = house.grid.cell_centres()[nav]
+        return centres[np.argmin(np.hypot(centres[:, 0] - (x0 + x1) / 2, centres[:, 1] - (y0 + y1) / 2))]
+
+    def region_mask(self, house: House) -> np.ndarray:
+        """(H, W) bool: cells where a source may be (``source_region``), always within free space."""
+        if isinstance(self.source_region, np.ndarray):
+            return self.source_region & house.grid.free
+        if self.source_region == "free":
+            return house.grid.free.copy()
+        return (house.room_labels >= 0) & house.grid.free
+
+    def source_spec(self, name):
+        """A world source name -> its class or position; other strings / pairs pass through (class or 'x,y')."""
+        if isinstance(name, str) and name in self.sources:
+            return self.sources[name]
+        return name
+
+    def resolve_source(self, spec, house: House) -> np.ndarray:
+        """(2,) position of a source spec (a world source name, an object class or a position)."""
+        spec = self.source_spec(spec)
+        if isinstance(spec, str):
+            objs = [o for o in house.objects if _true_class(o) == canonical_class(spec)]
+            if not objs:
+                present = sorted({_true_class(o) for o in house.objects})
+                raise ValueError(f"source class {spec!r} has no object in the house; classes present: {present}")
+            return objs[0].center.copy()
+        return np.asarray(spec, dtype=np.float64)
+
+    def make_world(self, seed: int = 0, source="oven", *, warm_up: float = 60.0, **kwargs):
+        """The running simulation (:func:`psgsl_pgm.sim.make_world`) of this world for one seed and source."""
+        from ._world import make_world
+
+        house = self.house(seed)
+        spec = self.source_spec(source)
+        if self.fixed_house is not None:  # object classes may be lumped into "other": resolve here
+            spec = self.resolve_source(spec, house)
+        else:
+            spec = spec if isinstance(spec, str) else np.asarray(spec, dtype=np.float64)
+        if self.wind["kind"] == "gaden":
+            kwargs.setdefault("wind", self.wind["sequence"])
+        else:
+            kwargs.setdefault("mean_speed", self.wind["speed"])
+            kwargs.setdefault("perturbation", self.wind["perturbation"])
+        return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
+
+    # --- summary -----------------------------------------------------------------------------------------
+    def summary(self, seed: int = 0) -> dict:
+        """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources."""
+        house = self.house(seed)
+        g = house.grid
+        cell_area = g.resolution ** 2
+        rooms = {}
+        for i, name in enumerate(house.room_names):
+            rooms[name] = rooms.get(name, 0.0) + float((house.room_labels == i).sum()) * cell_area
+        objects: dict = {}
+        for o in house.objects:
+            c = _true_class(o)
+            objects[c] = objects.get(c, 0) + 1
+        start = self.start_for(house)
+        region = self.region_mask(house)
+        sources = {}
+        for name in self.sources:
+            xy = self.resolve_source(name, house)
+            room = int(house.room_of(xy))
+            sources[name] = {"position": [float(xy[0]), float(xy[1])],
+                             "room": house.room_names[room] if room >= 0 else None}
+        ont = self.ontology
+        no_rooms = sorted(set(house.room_names) - {r for r in house.room_names
+                                                   if any(_same(r, o) for o in ont.rooms)}) if ont.rooms else []
+        return {
+            "world": str(self.path),
+            "grid": {"rows": g.shape[0], "cols": g.shape[1], "resolution": g.resolution,
+                     "extent": [float(v) for v in g.extent], "free_cells": int(g.free.sum())},
+            "rooms": rooms,
+            "objects": objects,
+            "unlisted_classes": sorted(set(objects) - set(ont.classes)),
+            "windows": [{"role": w["role"], "from": list(w["from"]), "to": list(w["to"]),
+                         "cells": int(w["cells"])} for w in self.windows],
+            "wind": {k: v for k, v in self.wind.items() if k != "sequence"}
+            | ({"snapshots": len(self.wind["sequence"].snapshots)} if self.wind["kind"] == "gaden" else {}),
+            "start": [float(start[0]), float(start[1])],
+            "sources": sources,
+            "source_region": self.source_region if isinstance(self.source_region, str) else "mask",
+            "source_region_area": float(region.sum()) * cell_area,
+            "ontology": {"classes": list(ont.classes), "gases": list(ont.gases), "rooms": list(ont.rooms),
+                         "rooms_at_class_prior": no_rooms},
+            "gas": self.gas,
+            "semantic_map": None if self.class_beliefs is None else list(self.class_beliefs.shape),
+        }
+
+
+def _same(a: str, b: str) -> bool:
+    from ._classes import _key
+
+    return _key(a) == _key(b)
+
+
+def _true_class(o: SceneObject) -> str:
+    """An object's own class (objects lumped into ``other`` keep it in their name, ``class#name``)."""
+    if o.class_name == "other" and "#" in o.name:
+        return o.name.split("#", 1)[0]
+    return o.class_name
+
+
+def default_world() -> WorldSpec:
+    """The embedded house as a world (``psgsl_pgm/data/worlds/house.yaml``)."""
+    with resources.as_file(resources.files("psgsl_pgm") / "data" / "worlds" / "house.yaml") as path:
+        return load_world(path)
+
+
+def load_world(path) -> WorldSpec:
+    """Load and check a world file (see the module docstring): every file it names and every key.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    WorldSpec
+
+    Raises
+    ------
+    FileNotFoundError
+        The world file does not exist.
+    ValueError
+        Any bad key or file (also a missing file the world file names): the message starts with the world file
+        and names the key (and, for errors inside a named file, that file and its field).
+    """
+    wpath, data = read_yaml_mapping(path)
+    where = str(wpath)
+    check_keys(where, data, optional=_KEYS)
+    try:
+        return _load(wpath, where, data)
+    except FileNotFoundError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _file(wpath: Path, data: dict, key: str) -> Path:
+    p = resolve(wpath, data[key], key)
+    if not p.is_file():
+        raise ValueError(f"{wpath}: key '{key}' names {p}, which does not exist")
+    return p
+
+
+def _inner(where: str, key: str, exc: Exception) -> ValueError:
+    """An error inside a file named by ``key``: keep the file's own message, prefixed by the world key."""
+    return ValueError(f"{where}: key '{key}': {exc}")
+
+
+def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
+    from .._ontology import Ontology
+
+    builtin = data.get("builtin")
+    if builtin is not None:
+        if builtin != "default_house":
+            raise ValueError(f"{where}: key 'builtin' must be 'default_house', got {builtin!r}")
+        clash = sorted(k for k in ("map", "resolution", "rooms", "objects", "semantic_map") if k in data)
+        if clash:
+            raise ValueError(f"{where}: key 'builtin' describes the house; remove key(s) {clash}")
+    else:
+        for key in ("map", "rooms", "ontology", "wind"):
+            if key not in data:
+                raise ValueError(f"{where}: missing required key '{key}'")
+    clearance = number(where, "clearance", data.get("clearance", 0.25), positive=True)
+
+    # ontology
+    if "ontology" not in data:
+        raise ValueError(f"{where}: missing required key 'ontology'")
+    if data["ontology"] == "house":
+        if "room_classes" in data:
+            raise ValueError(f"{where}: key 'room_classes' cannot refine the built-in 'house' ontology")
+        from ..experiment._ontology import house_ontology
+
+        ontology = house_ontology()
+    else:
+        opath = _file(wpath, data, "ontology")
+        rpath = _file(wpath, data, "room_classes") if "room_classes" in data else None
+        try:
+            ontology = Ontology.from_yaml(opath, room_classes=rpath)
+        except (ValueError, TypeError, FileNotFoundError) as exc:
+            raise _inner(where, "ontology" if rpath is None else "ontology/room_classes", exc) from None
+    gas = data.get("gas")
+    if gas is not None and gas not in ontology.gases:
+        raise ValueError(f"{where}: key 'gas': {gas!r} is not a gas of the ontology {list(ontology.gases)}")
+
+    # the house
+    house, object_classes, map_path = None, (), None
+    if builtin is None:
+        house, object_classes, map_path = _load_house(wpath, where, data, ontology)
+    probe = house if house is not None else default_house(0)
+
+    windows = ()
+    wind = _load_wind(wpath, where, data.get("wind", {}), probe, builtin is not None)
+    if house is not None:
+        house, windows = _open_windows(where, house, data.get("wind", {}), wind)
+        if wind["kind"] == "gaden":
+            wind["sequence"] = _gaden(wpath, where, data["wind"], house.grid)
+        elif not (house.inlet.any() and house.outlet.any()):
+            raise ValueError(f"{where}: key 'wind.windows' needs at least one inlet and one outlet for the potential "
+                             "flow")
+        probe = house
+
+    # where a source may be
+    region = data.get("source_region", "rooms")
+    if isinstance(region, str) and region in _REGIONS:
+        region_value = region
+    elif isinstance(region, str) and builtin is None:
+        p = _file(wpath, data, "source_region")
+        grey = read_grey_image(p, where=where, field="source_region")
+        region_value = _mask_to_grid(where, "source_region", grey, house, map_path)
+    else:
+        raise ValueError(f"{where}: key 'source_region' must be 'rooms', 'free' or a mask image, got {region!r}")
+
+    # start and sources
+    start = None
+    if "start" in data:
+        start = np.array(number_list(where, "start", data["start"], length=2))
+    sources = _load_sources(where, data.get("sources", {}))
+
+    beliefs = None
+    if "semantic_map" in data:
+        from .._class_maps import read_class_beliefs
+
+        p = _file(wpath, data, "semantic_map")
+        try:
+            beliefs = read_class_beliefs(p, ontology.classes, grid=house.grid, class_prior=ontology.class_prior)
+        except (ValueError, TypeError) as exc:
+            raise _inner(where, "semantic_map", exc) from None
+        if beliefs.shape[:2] != house.grid.shape:
+            raise ValueError(f"{where}: key 'semantic_map': beliefs of shape {beliefs.shape} do not cover the "
+                             f"working grid {house.grid.shape}")
+
+    spec = WorldSpec(wpath, ontology, gas, wind, start, sources, region_value, beliefs, windows, house, builtin,
+                     clearance, object_classes, map_path)
+    _check_positions(where, spec, probe)
+    return spec
+
+
+def _load_house(wpath: Path, where: str, data: dict, ontology):
+    mpath = _file(wpath, data, "map")
+    try:
+        fine = load_ros_map(mpath)
+    except (ValueError, FileNotFoundError) as exc:
+        raise _inner(where, "map", exc) from None
+    rpath = _file(wpath, data, "rooms")
+    try:
+        fine_labels, names = load_room_map(rpath, like=fine)
+    except (ValueError, FileNotFoundError) as exc:
+        raise _inner(where, "rooms", exc) from None
+    res = number(where, "resolution", data["resolution"], positive=True) if "resolution" in data else fine.resolution
+    factor = coarsen_factor(fine.resolution, res, where=f"{where}: key 'resolution'")
+    grid = coarsen_occupancy(fine, factor)
+    labels = coarsen_labels(fine_labels, len(names), factor)
+    objects, classes_seen = [], []
+    if "objects" in data:
+        opath = _file(wpath, data, "objects")
+        try:
+            raw = load_objects(opath, like=grid)
+        except (ValueError, FileNotFoundError) as exc:
+            raise _inner(where, "objects", exc) from None
+        known = set(ontology.classes)
+        for i, o in enumerate(raw):
+            cls = canonical_class(o.class_name)
+            classes_seen.append(cls)
+            name = o.name if o.name != o.class_name else f"{cls}_{i}"
+            if cls in known:
+                objects.append(SceneObject(cls, o.footprint, o.z_range, name))
+            else:  # the lab's rule: a class the ontology does not list is an "other"; keep the class in the name
+                objects.append(SceneObject("other", o.footprint, o.z_range, f"{cls}#{name}"))
+    empty = np.zeros(grid.shape, bool)
+    house = House(grid, labels, tuple(names), tuple(objects), empty, empty, tuple(ontology.classes))
+    return house, tuple(dict.fromkeys(classes_seen)), mpath
+
+
+def _load_wind(wpath: Path, where: str, wind, probe: House, builtin: bool) -> dict:
+    if not isinstance(wind, dict):
+        raise ValueError(f"{where}: key 'wind' must be a mapping (speed + windows, or gaden_csv + height), got {wind!r}")
+    if "gaden_csv" in wind:
+        check_keys(f"{where}: key 'wind'", wind, required=("gaden_csv", "height"), optional=_WIND_GADEN)
+        number(where, "wind.height", wind["height"])
+        if "period" in wind:
+            number(where, "wind.period", wind["period"], positive=True)
+        if builtin:
+            raise ValueError(f"{where}: key 'wind.gaden_csv' is not available with 'builtin'")
+        return {"kind": "gaden", "height": float(wind["height"]), "period": float(wind.get("period", 1.0))}
+    allowed = _WIND_POTENTIAL if not builtin else ("speed", "perturbation")
+    check_keys(f"{where}: key 'wind'", wind, required=("speed",), optional=allowed)
+    speed = number(where, "wind.speed", wind["speed"], positive=True)
+    pert = number(where, "wind.perturbation", wind.get("perturbation", 0.3), nonnegative=True)
+    return {"kind": "potential", "speed": speed, "perturbation": pert}
+
+
+def _open_windows(where: str, house: House, wind: dict, spec: dict):
+    items = wind.get("windows", [])
+    if not isinstance(items, list):
+        raise ValueError(f"{where}: key 'wind.windows' must be a list of {{role, from, to}}, got {items!r}")
+    inlet = np.zeros(house.shape, bool)
+    outlet = np.zeros(house.shape, bool)
+    out = []
+    for i, w in enumerate(items):
+        key = f"wind.windows[{i}]"
+        check_keys(f"{where}: key '{key}'", w, required=("role", "from", "to"), optional=("width",))
+        role = w["role"]
+        if role not in ("inlet", "outlet"):
+            raise ValueError(f"{where}: key '{key}.role' must be 'inlet' or 'outlet', got {role!r}")
+        p0 = number_list(where, f"{key}.from", w["from"], length=2)
+        p1 = number_list(where, f"{key}.to", w["to"], length=2)
+        width = number(where, f"{key}.width", w.get("width", 0.15), positive=True)
+        mask = segment_mask(house.grid, p0, p1, width=max(width, 0.5 * house.grid.resolution))
+        if not mask.any():
+            raise ValueError(f"{where}: key '{key}': no cell of the map lies within {width} m of the segment "
+                             f"{p0} -> {p1} (the map spans {house.grid.extent})")
+        target = inlet if role == "inlet" else outlet
+        other = outlet if role == "inlet" else inlet
+        if (mask & other).any():
+            raise ValueError(f"{where}: key '{key}': the window overlaps a window of the other role")
+        target |= mask
+        out.append({"role": role, "from": tuple(p0), "to": tuple(p1), "width": width, "cells": int(mask.sum())})
+    grid = house.grid.with_occupancy(house.grid.occupancy & ~inlet & ~outlet)
+    opened = House(grid, house.room_labels, house.room_names, house.objects, inlet, outlet, house.classes)
+    return opened, tuple(out)
+
+
+def _gaden(wpath: Path, where: str, wind: dict, grid: GridMap):
+    from ._cfd import read_gaden_wind_snapshots
+
+    names = wind["gaden_csv"]
+    names = [names] if isinstance(names, str) else names
+    if not isinstance(names, list) or not names:
+        raise ValueError(f"{where}: key 'wind.gaden_csv' must be a CSV file or a list of them, got {names!r}")
+    paths = []
+    for i, n in enumerate(names):
+        p = resolve(wpath, n, f"wind.gaden_csv[{i}]")
+        if not p.is_file():
+            raise ValueError(f"{where}: key 'wind.gaden_csv[{i}]' names {p}, which does not exist")
+        paths.append(p)
+    try:
+        return read_gaden_wind_snapshots(paths, like=grid, height=float(wind["height"]),
+                                         period=float(wind.get("period", 1.0)))
+    except (ValueError, FileNotFoundError) as exc:
+        raise _inner(where, "wind.gaden_csv", exc) from None
+
+
+def _mask_to_grid(where: str, key: str, grey: np.ndarray, house: House, map_path) -> np.ndarray:
+    """A mask image in the map's pixel frame (fine or working grid) -> (H, W) bool on the working grid."""
+    fine = load_ros_map(map_path)
+    img = grey[::-1] > 127
+    if img.shape == house.grid.shape:
+        return img
+    if img.shape != fine.shape:
+        raise ValueError(f"{where}: key '{key}': the mask is {img.shape[1]} x {img.shape[0]} pixels; expected the "
+                         f"map's {fine.shape[1]} x {fine.shape[0]} or the working grid's "
+                         f"{house.grid.shape[1]} x {house.grid.shape[0]}")
+    factor = coarsen_factor(fine.resolution, house.grid.resolution)
+    return coarsen_labels(img.astype(np.int64) - 1, 1, factor) == 0  # majority of fine pixels
+
+
+def _load_sources(where: str, sources) -> dict:
+    if not isinstance(sources, dict):
+        raise ValueError(f"{where}: key 'sources' must be a mapping name -> [x, y] or object class, got {sources!r}")
+    out = {}
+    for name, value in sources.items():
+        if not isinstance(name, str) or not name.strip() or "," in name:
+            raise ValueError(f"{where}: key 'sources' has an invalid name {name!r} (a non-empty string without ',')")
+        if isinstance(value, str):
+            if not value.strip():
+                raise ValueError(f"{where}: key 'sources.{name}' must be an object class or [x, y], got {value!r}")
+            out[name] = canonical_class(value)
+        else:
+            out[name] = tuple(number_list(where, f"sources.{name}", value, length=2))
+    return out
+
+
+def _check_positions(where: str, spec: WorldSpec, house: House) -> None:
+    g = house.grid
+    start = spec.start_for(house)
+    nav = navigable(house, spec.clearance)
+    rc = g.world_to_cell(start)
+    if not g.contains(rc) or not nav[rc[0], rc[1]]:
+        why = "outside the map" if not g.contains(rc) else f"not navigable (free and {spec.clearance} m from walls, " \
+                                                          "furniture and windows)"
+        raise ValueError(f"{where}: key 'start' ({start[0]:g}, {start[1]:g}) is {why}")
+    region = spec.region_mask(house)
+    if not region.any():
+        raise ValueError(f"{where}: key 'source_region' allows no free cell")
+    for name in spec.sources:
+        try:
+            xy = spec.resolve_source(name, house)
+        except ValueError as exc:
+            raise ValueError(f"{where}: key 'sources.{name}': {exc}") from None
+        rc = g.world_to_cell(xy)
+        if not g.contains(rc):
+            raise ValueError(f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies outside the map {g.extent}")
+        if not region[rc[0], rc[1]]:
+            raise ValueError(f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies outside the source region "
+                             f"({spec.source_region if isinstance(spec.source_region, str) else 'mask'}) or on a wall")

@@ -1,0 +1,90 @@
+"""The lab's real house (../shared/data/mapir_house_B) as a world file written here, pointing at the lab's files.
+
+Skipped when ../shared is absent; the lab's files are never copied into the project.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B"
+
+pytestmark = [pytest.mark.shared_data,
+              pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/mapir_house_B is absent")]
+
+WINDOWS = [  # from the data README (the lab's outlet models)
+    {"role": "inlet", "from": [-7.15, 3.42], "to": [-5.65, 3.42]},
+    {"role": "inlet", "from": [-2.65, 3.42], "to": [-1.10, 3.42]},
+    {"role": "outlet", "from": [-1.70, -7.88], "to": [-0.25, -7.88]},
+    {"role": "outlet", "from": [-6.45, -7.88], "to": [-4.95, -7.88]},
+]
+
+
+def write_real_world(d: Path, **over) -> Path:
+    """World file for the lab's house: walls-only map at 0.1 m, the lab's masks, ontology and room classes."""
+    b1 = yaml.safe_load((SHARED / "simulations" / "B1.yaml").read_text())
+    start = yaml.safe_load((SHARED / "basicSim" / "B1.yaml").read_text())["robots"][0]["position"]
+    (d / "walls.yaml").write_text(yaml.safe_dump({
+        "image": str(SHARED / "_occupancy_walls.pgm"), "resolution": 0.01, "origin": [-7.55, -7.88, 0.0],
+        "negate": 0, "occupied_thresh": 0.9, "free_thresh": 0.1}))
+    (d / "objects.yaml").write_text(yaml.safe_dump({"objects": [  # our own placement; the lab ships no list
+        {"class": "oven", "position": [b1["source_x"], b1["source_y"]], "size": [0.6, 0.6], "height": [0.0, 0.9]},
+        {"class": "microwave", "position": [-1.5, 2.6], "size": [0.5, 0.4], "height": [0.9, 1.2]},
+        {"class": "fridge", "position": [0.4, 2.8], "size": [0.7, 0.7], "height": [0.0, 1.8]},
+        {"class": "toilet", "position": [-0.4, -3.4], "size": [0.5, 0.6], "height": [0.0, 0.8]},
+        {"class": "bed", "position": [-5.5, -5.5], "size": [1.6, 2.0], "height": [0.0, 0.6]},
+    ]}))
+    world = {
+        "map": "walls.yaml", "resolution": 0.1,
+        "rooms": str(SHARED / "room_categories" / "roomMasks.yaml"),
+        "objects": "objects.yaml",
+        "ontology": str(SHARED / "ontology.yaml"), "room_classes": str(SHARED / "ObjectProbByRoom.yaml"),
+        "gas": "smoke", "source_region": "rooms",
+        "wind": {"speed": 0.2, "windows": WINDOWS},
+        "start": [float(start[0]), float(start[1])],
+        "sources": {"B1": [b1["source_x"], b1["source_y"]], "oven": "oven"},
+    }
+    world.update(over)
+    path = d / "world.yaml"
+    path.write_text(yaml.safe_dump(world, sort_keys=False))
+    return path
+
+
+def test_world_check_on_the_real_house(tmp_path, capsys):
+    from psgsl_pgm._cli import main
+    from psgsl_pgm.sim import load_room_map, load_ros_map
+
+    path = write_real_world(tmp_path)
+    assert main(["world", "check", str(path), "--png", str(tmp_path / "house.png")]) == 0
+    out = capsys.readouterr().out
+    assert "grid: 114 x 87 cells of 0.1 m" in out
+    assert "source B1: (-0.60, 1.95) in Kitchen" in out
+    assert "at the class prior: Hallway, LivingRoom" in out
+    from psgsl_pgm import load_world
+
+    summary = load_world(path).summary()
+    fine = load_ros_map(tmp_path / "walls.yaml")
+    labels, names = load_room_map(SHARED / "room_categories" / "roomMasks.yaml", like=fine)
+    for i, name in enumerate(names):  # areas at 0.1 m (rooms by majority) within 5 % of the 1 cm masks
+        assert summary["rooms"][name] == pytest.approx((labels == i).sum() * 1e-4, rel=0.05), name
+    assert (tmp_path / "house.png").stat().st_size > 20_000
+
+
+def test_the_real_house_world_builds_a_simulation(tmp_path):
+    from psgsl_pgm import load_world
+
+    spec = load_world(write_real_world(tmp_path))
+    world = spec.make_world(seed=0, source="B1", warm_up=5.0)
+    house = world.house
+    assert house.room_names[int(house.room_of(world.source))] == "Kitchen"
+    assert world.gas.n_released > 0
+    onto = spec.ontology
+    smoke = onto.source_likelihood("smoke")
+    assert smoke[onto.class_index("oven")] / smoke[onto.class_index("microwave")] == pytest.approx(4 / 3, rel=1e-12)
+    # the source region keeps p(s) off walls and outside the rooms
+    region = spec.region_mask(house)
+    assert not (region & house.grid.occupancy).any() and not (region & (house.room_labels < 0)).any()
+    assert 0.5 < region.sum() / house.grid.free.sum() <= 1.0
+    assert np.isfinite(world.wind_now().velocity).all()
