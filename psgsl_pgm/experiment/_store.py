@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 
+from .._grid_runner import atomic_write
 from ._config import source_label
 from ._run import RunResult
 
-__all__ = ["load_run", "run_path", "save_run"]
+__all__ = ["load_run", "run_path", "save_run", "write_run"]
 
 
 def run_path(directory, source, estimator: str, seed: int) -> Path:
@@ -19,22 +19,22 @@ def run_path(directory, source, estimator: str, seed: int) -> Path:
     return Path(directory) / "runs" / f"{source_label(source)}__{estimator}__seed{int(seed)}.npz"
 
 
-def save_run(result: RunResult, path) -> Path:
-    """Write ``result`` to ``path`` (via a temporary file and ``os.replace``: a killed run leaves no file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+def write_run(result: RunResult, fh) -> None:
+    """Write ``result`` as an ``.npz`` archive to the binary file object ``fh`` (see :func:`save_run`)."""
     steps = np.array(sorted(result.snapshots), dtype=np.int64)
     snaps = np.stack([result.snapshots[s] for s in steps]) if len(steps) else np.zeros((0, 3, 0, 0))
-    tmp = path.with_name(path.name + ".part")
-    with open(tmp, "wb") as fh:
-        np.savez_compressed(
-            fh, source=np.array(result.source), seed=np.array(result.seed), estimator=np.array(result.estimator),
-            source_xy=result.source_xy, time=result.time, position=result.position, hit=result.hit,
-            error=result.error, spread=result.spread, snapshot_steps=steps, snapshots=snaps,
-            config=np.array(json.dumps(result.config, sort_keys=True)),
-        )
-    os.replace(tmp, path)
-    return path
+    np.savez_compressed(
+        fh, source=np.array(result.source), seed=np.array(result.seed), estimator=np.array(result.estimator),
+        source_xy=result.source_xy, time=result.time, position=result.position, hit=result.hit,
+        error=result.error, spread=result.spread, snapshot_steps=steps, snapshots=snaps,
+        config=np.array(json.dumps(result.config, sort_keys=True)),
+    )
+
+
+def save_run(result: RunResult, path) -> Path:
+    """Write ``result`` to ``path`` atomically (:func:`psgsl_pgm._grid_runner.atomic_write`: a temporary file
+    and ``os.replace``, so a killed run leaves no file)."""
+    return atomic_write(path, write_run, result)
 
 
 def load_run(path) -> RunResult:
