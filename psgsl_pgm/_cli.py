@@ -29,12 +29,17 @@ def _kitchen(args) -> int:
 
 
 def _demo(args) -> int:
+    from ._cli_grid import interrupted
+    from ._grid_runner import GridInterrupted
     from .experiment import DEMO_SEEDS, format_table, run_demo
 
     seeds = range(args.seeds) if args.seeds is not None else DEMO_SEEDS
     print(f"psgsl demo: smoke from the kitchen oven of the simulated house, {len(seeds)} seeds, "
           f"{args.workers} workers -> {args.out}", flush=True)
-    summary = run_demo(args.out, seeds=seeds, workers=args.workers, progress=not args.quiet)
+    try:
+        summary = run_demo(args.out, seeds=seeds, workers=args.workers, progress=not args.quiet)
+    except GridInterrupted as exc:
+        return interrupted(args, exc, where=os.path.join(args.out, "runs"))
     print(format_table(summary, title="olfaction (grid Infotaxis) vs + camera semantics vs + room categories"))
     print(f"written to {args.out}: summary.json, summary.txt, metrics.csv, error-chart.png, progression.png, "
           "room-types.png, runs/")
@@ -42,14 +47,22 @@ def _demo(args) -> int:
 
 
 def _experiment(args) -> int:
-    from .experiment import format_table, parse_source, run_experiment
+    from ._cli_grid import interrupted
+    from ._grid_runner import GridInterrupted
+    from .experiment import ExperimentConfig, format_table, parse_source, run_experiment
 
     try:
         sources = [parse_source(s) for s in args.sources]
     except ValueError as exc:
         raise _UsageError(str(exc)) from None
-    summaries = run_experiment(sources, range(args.seeds), args.estimators, out=args.out, workers=args.workers,
-                               progress=not args.quiet)
+    try:
+        summaries = run_experiment(sources, range(args.seeds), args.estimators, out=args.out, workers=args.workers,
+                                   progress=not args.quiet, config=ExperimentConfig(stops=args.stops),
+                                   scheduler=args.scheduler)
+    except GridInterrupted as exc:
+        return interrupted(args, exc, where=os.path.join(args.out, "runs"))
+    except (ValueError, TypeError) as exc:  # e.g. stored runs of another configuration, an unreachable scheduler
+        raise _UsageError(str(exc)) from None
     for key, summary in summaries.items():
         print(format_table(summary, title=key))
         print()
@@ -125,6 +138,7 @@ def _positive_int(text):
 
 def build_parser() -> argparse.ArgumentParser:
     from . import _cli_world
+    from ._cli_grid import add_scheduler_argument
     from .experiment import ESTIMATORS
 
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
@@ -147,6 +161,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="olfactory estimators (default: both)")
     exp.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
+    add_scheduler_argument(exp)
+    exp.add_argument("--stops", type=_positive_int, default=None,
+                     help="follow only the first N stops of the tour (quick checks; default: the whole tour)")
     exp.add_argument("--quiet", action="store_true", help="no progress bar")
     exp.set_defaults(func=_experiment)
 
@@ -166,9 +183,12 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     """Entry point of ``psgsl``; returns the exit code (0 ok, 2 usage or input error)."""
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)  # argparse prints usage + one line and exits 2 on bad syntax
     if args.command is None:
-        args = parser.parse_args(["demo"])
+        argv = ["demo"]
+        args = parser.parse_args(argv)
+    args.argv = argv  # for the resume hint after Ctrl-C
     try:
         return args.func(args)
     except _UsageError as exc:

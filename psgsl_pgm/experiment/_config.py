@@ -38,6 +38,9 @@ class ExperimentConfig:
         evaluation, gives 2.3589; stored to three significant digits).
     tempering, false_hit_rate : float
         β and ε of :class:`psgsl_pgm.olfaction.GridInfotaxis`.
+    stops : int, optional
+        Follow only the first ``stops`` stops of the tour (default: the whole tour). For quick checks and tests
+        of the grid machinery; never part of a reported experiment.
     """
 
     gas: str = "smoke"
@@ -49,12 +52,16 @@ class ExperimentConfig:
     encounter_scale: float = 2.36
     tempering: float = 0.5
     false_hit_rate: float = 0.01
+    stops: int | None = None
 
     def __post_init__(self):
         if not isinstance(self.gas, str):
             raise TypeError(f"gas must be a gas name (str), got {type(self.gas).__name__}")
+        if self.stops is not None and (isinstance(self.stops, bool) or not isinstance(self.stops, (int, np.integer))
+                                       or self.stops < 1):
+            raise ValueError(f"stops must be a positive integer or None (the whole tour), got {self.stops!r}")
         for f in fields(self):
-            if f.name == "gas":
+            if f.name in ("gas", "stops"):
                 continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not np.isfinite(v):
@@ -66,7 +73,14 @@ class ExperimentConfig:
                              f"{self.false_hit_rate!r}")
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The settings as a dict (stored with every run). ``stops`` appears only when set, so a whole-tour
+        configuration has the same dict as before the option existed (its stored runs still resume)."""
+        d = asdict(self)
+        if d["stops"] is None:
+            del d["stops"]
+        else:
+            d["stops"] = int(d["stops"])
+        return d
 
 
 def parse_source(spec) -> str | tuple:

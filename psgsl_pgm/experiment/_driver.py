@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import itertools
-import multiprocessing as mp
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+from .._grid_runner import GridJob, run_grid
 from ._config import ESTIMATORS, ExperimentConfig, parse_source, source_label
-from ._store import load_run, run_path, save_run
+from ._store import load_run, run_path, write_run
 from ._summary import format_table, summarize, write_csv, write_summary
 
-__all__ = ["DEMO_SEEDS", "SNAPSHOTS", "run_demo", "run_experiment", "write_outputs"]
+__all__ = ["DEMO_SEEDS", "SNAPSHOTS", "experiment_jobs", "run_demo", "run_experiment", "write_outputs"]
 
 #: Seeds of ``psgsl demo`` (a few; ``psgsl experiment`` reports ≥ 10).
 DEMO_SEEDS = tuple(range(4))
@@ -20,17 +19,29 @@ DEMO_SEEDS = tuple(range(4))
 SNAPSHOTS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
 
-def _job(args):
-    source, seed, estimator, config, path, snapshots = args
-    from ._run import run_search
+def _stored_config_check(config: ExperimentConfig):
+    def check(job: GridJob) -> None:
+        stored = load_run(job.path).config
+        if stored != config.to_dict():
+            raise ValueError(f"{job.path} was computed with another configuration ({stored}); use a new output "
+                             "directory or delete the stored runs")
+    return check
 
-    result = run_search(source, seed, estimator, config=config, snapshot_at=snapshots)
-    save_run(result, path)
-    return str(path)
+
+def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig) -> list:
+    """The grid's jobs (:class:`psgsl_pgm._grid_runner.GridJob`): one :func:`run_search` per (source, estimator,
+    seed), its result to :func:`run_path`; the smallest seed keeps the progression figure's snapshots."""
+    from . import _run
+
+    first = min(seeds)
+    return [GridJob(run_path(out, source, estimator, seed), _run.run_search, (source, seed, estimator),
+                    {"config": config, "snapshot_at": SNAPSHOTS if seed == first else ()})
+            for source, estimator, seed in itertools.product(sources, estimators, seeds)]
 
 
 def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",), *, out, workers: int = 2,
-                   config: ExperimentConfig | None = None, progress: bool = True, flat: bool = False) -> dict:
+                   config: ExperimentConfig | None = None, progress: bool = True, flat: bool = False,
+                   scheduler: str | None = None) -> dict:
     """Run every (source, seed, estimator) not yet on disk, then aggregate everything in ``out``.
 
     Parameters
@@ -43,20 +54,27 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
         Output directory; finished runs live in ``out/runs`` and are never redone (resumable); a stored run
         with another configuration is an error, not silently mixed in.
     workers : int, keyword-only
-        Worker processes (1 = run in this process).
+        Worker processes of the local pool (1 = run in this process) or of ``scheduler="local"``.
     config : ExperimentConfig, optional, keyword-only
     progress : bool, keyword-only
         Show a tqdm progress bar (on stderr).
     flat : bool, keyword-only
         See :func:`write_outputs`.
+    scheduler : None, "local" or str, optional, keyword-only
+        Where the runs go (:func:`psgsl_pgm._grid_runner.run_grid`): the local pool (None), a dask LocalCluster
+        of ``workers`` processes ("local"), or a running dask scheduler (``"tcp://HOST:PORT"``). Every backend
+        gives bit-identical runs.
 
     Returns
     -------
     dict
         ``{"source/estimator": summary}`` (see :func:`summarize`), also written to ``out/summary.json``.
-    """
-    from tqdm.auto import tqdm
 
+    Raises
+    ------
+    psgsl_pgm._grid_runner.GridInterrupted
+        On Ctrl-C; the finished runs are on disk and the same call resumes.
+    """
     config = ExperimentConfig() if config is None else config
     sources = [parse_source(s) for s in sources]
     seeds = [int(s) for s in seeds]
@@ -70,29 +88,9 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
     out = Path(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    first = min(seeds)
-    jobs = []
-    for source, estimator, seed in itertools.product(sources, estimators, seeds):
-        path = run_path(out, source, estimator, seed)
-        if path.exists():
-            stored = load_run(path).config
-            if stored != config.to_dict():
-                raise ValueError(f"{path} was computed with another configuration ({stored}); use a new output "
-                                 "directory or delete the stored runs")
-            continue
-        jobs.append((source, seed, estimator, config, path, SNAPSHOTS if seed == first else ()))
-    bar = tqdm(total=len(jobs), desc="search runs", unit="run", disable=not progress or not jobs)
-    if workers == 1 or len(jobs) <= 1:
-        for job in jobs:
-            _job(job)
-            bar.update()
-    else:
-        ctx = mp.get_context("spawn")  # no fork of a threaded process
-        with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx) as pool:
-            for fut in as_completed([pool.submit(_job, j) for j in jobs]):
-                fut.result()
-                bar.update()
-    bar.close()
+    jobs = experiment_jobs(sources, seeds, estimators, out=out, config=config)
+    run_grid(jobs, write=write_run, check_done=_stored_config_check(config), scheduler=scheduler, workers=workers,
+             progress=progress, desc="search runs")
     return write_outputs(out, sources, seeds, estimators, flat=flat)
 
 

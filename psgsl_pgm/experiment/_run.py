@@ -142,6 +142,8 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         world = make_world(seed=int(seed), source=spec, warm_up=config.warm_up)
     house = world.house
     tour = exploration_tour(house) if tour is None else tour
+    if config.stops is not None and config.stops < len(tour):
+        tour = tour.first(config.stops)
     ontology = house_ontology()
     if config.gas not in ontology.gases:
         raise ValueError(f"gas must be one of the ontology's gases {ontology.gases}, got {config.gas!r}")

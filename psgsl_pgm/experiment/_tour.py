@@ -56,6 +56,12 @@ class Tour:
     def __len__(self) -> int:
         return len(self.stops)
 
+    def first(self, n: int) -> "Tour":
+        """The tour cut after its first ``n`` stops (the same path, for drawing)."""
+        n = int(n)
+        return Tour(self.stops[:n], self.headings[:n], self.path, self.distance[:n], self.waypoint[:n],
+                    self.path_index[:n])
+
 
 def _grid_graph(nav: np.ndarray, resolution: float):
     """Sparse 8-connected graph over navigable cells (edge weight = centre distance, no corner cutting)."""
