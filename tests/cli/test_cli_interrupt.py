@@ -1,6 +1,7 @@
 """Ctrl-C during ``psgsl experiment`` (issue 12): stop, keep every finished run, exit 130 with one line, resume.
 
-The signal goes to the whole process group, as a terminal's Ctrl-C does (workers included).
+The signal goes to the whole process group, as a terminal's Ctrl-C does (workers included). Marked slow (a few
+grids of real runs in subprocesses); tests/core/test_grid_runner.py covers the same logic in-process by default.
 """
 
 from __future__ import annotations
@@ -69,6 +70,7 @@ def _check_interrupted(proc, out, timeout):
     return m, lines[0]
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_finished_runs_exits_130_and_resumes_only_the_missing(tmp_path):
     out = tmp_path / "exp"
     proc = _start(out, "--workers", "2")
@@ -92,6 +94,7 @@ def test_ctrl_c_keeps_finished_runs_exits_130_and_resumes_only_the_missing(tmp_p
         assert after[name] == state, f"{name} was recomputed or rewritten"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs Linux /proc to list the process group")
 def test_second_ctrl_c_exits_at_once_without_corrupting(tmp_path):
     out = tmp_path / "exp"
