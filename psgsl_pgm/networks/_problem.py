@@ -15,34 +15,31 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
+from .._beliefs import update_class_probs
+from .._fusion import fuse
+from .._semantic import semantic_source_probability
+from .._validate import as_float_array, check_nonnegative, check_sums, index as as_index
 from ._names import check_identifier
 
 __all__ = ["SemanticGSLProblem"]
 
-_SUM_TOL = 1e-9  # tolerance on "sums to 1" for the distributions a problem is given
-
-
-def _array(x, name: str, ndim: int) -> np.ndarray:
-    """Float64 copy of ``x`` with ``ndim`` dimensions, finite and non-negative."""
-    try:
-        arr = np.array(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"{name} must be a numeric array, got {type(x).__name__}") from exc
-    if arr.ndim != ndim:
-        raise ValueError(f"{name} must have {ndim} dimension(s), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite, got NaN or inf")
-    if np.any(arr < 0):
-        raise ValueError(f"{name} must be non-negative, got minimum {arr.min()!r}")
+def _array(x, name: str, ndim: int, *, keep_float32: bool = False) -> np.ndarray:
+    """Validated real array (the shared vocabulary's type contract) with ``ndim`` dimensions, finite and
+    non-negative; float64 unless ``keep_float32`` and ``x`` is float32 (so that its sums are judged with
+    float32's tolerance)."""
+    arr = as_float_array(x, name, ndim=ndim) if keep_float32 else as_float_array(x, name, dtype=np.float64, ndim=ndim)
+    if arr.size:
+        check_nonnegative(arr, name)
     return arr
 
 
-def _distribution(x, name: str, axis: int = -1) -> np.ndarray:
-    """Validate that ``x`` sums to 1 along ``axis`` (to 1e-9) and renormalise it to round-off."""
-    sums = x.sum(axis=axis, keepdims=True)
-    if x.size and not np.all(np.abs(sums - 1.0) <= _SUM_TOL):
-        raise ValueError(f"{name} must sum to 1 along its last axis (to {_SUM_TOL:g}), got sums {sums.ravel()}")
-    return x / sums
+def _distribution(x: np.ndarray, name: str) -> np.ndarray:
+    """Require rows of ``x`` to sum to 1 within the core's tolerance for its dtype (:data:`SUM_RTOL`: 1e-6
+    in float64, 1e-4 in float32) and renormalise them in float64 to round-off."""
+    if x.size:
+        check_sums(np.sum(x, axis=-1, dtype=np.float64), name, x.dtype)
+    x = x.astype(np.float64)
+    return x / x.sum(axis=-1, keepdims=True)
 
 
 def _names(names, count: int, prefix: str, what: str) -> tuple[str, ...]:
@@ -126,14 +123,14 @@ class SemanticGSLProblem:
         gas_names=None,
         shape=None,
     ):
-        lik = _array(source_likelihood, "source_likelihood", np.ndim(source_likelihood))
+        lik = _array(source_likelihood, "source_likelihood", np.ndim(source_likelihood), keep_float32=True)
         if lik.ndim == 1:
             lik = lik[None, :]
         if lik.ndim != 2 or lik.shape[1] < 2:
             raise ValueError(f"source_likelihood must be (k,) or (m, k) with k >= 2, got shape {lik.shape}")
         self.source_likelihood = _distribution(lik, "source_likelihood")  # p(o | s, γ), (m, k)
         m, k = lik.shape
-        beta = _array(background, "background", 1)
+        beta = _array(background, "background", 1, keep_float32=True)
         if beta.shape != (k,):
             raise ValueError(f"background must have shape ({k},) like the ontology rows, got {beta.shape}")
         if np.any(beta <= 0):
@@ -155,8 +152,10 @@ class SemanticGSLProblem:
         self.class_names = _names(class_names, k, "o", "class name")
         self.gas_names = _names(gas_names, m, "gas", "gas name")
         if shape is not None:
-            shape = tuple(int(s) for s in shape)
-            if int(np.prod(shape)) != n or any(s < 1 for s in shape):
+            if isinstance(shape, (str, bytes)) or np.ndim(shape) != 1:
+                raise TypeError(f"shape must be a tuple of ints, got {type(shape).__name__} {shape!r}")
+            shape = tuple(as_index(s, "shape entries", minimum=1) for s in shape)
+            if int(np.prod(shape)) != n:
                 raise ValueError(f"shape {shape} must have positive sides whose product is n = {n}")
         self.shape = shape
 
@@ -190,11 +189,11 @@ class SemanticGSLProblem:
         if g.shape != (n,):
             raise ValueError(f"olfactory_likelihood must have shape ({n},), got {g.shape}")
         self.olfactory_likelihood = g  # p(g | S = c), (n,)
-        prior = np.full(n, 1.0 / n) if source_prior is None else _array(source_prior, "source_prior", 1)
+        prior = np.full(n, 1.0 / n) if source_prior is None else _array(source_prior, "source_prior", 1, keep_float32=True)
         if prior.shape != (n,):
             raise ValueError(f"source_prior must have shape ({n},), got {prior.shape}")
         self.source_prior = _distribution(prior, "source_prior")  # π_s, (n,)
-        gp = np.full(m, 1.0 / m) if gas_prior is None else _array(gas_prior, "gas_prior", 1)
+        gp = np.full(m, 1.0 / m) if gas_prior is None else _array(gas_prior, "gas_prior", 1, keep_float32=True)
         if gp.shape != (m,):
             raise ValueError(f"gas_prior must have shape ({m},), got {gp.shape}")
         self.gas_prior = _distribution(gp, "gas_prior")  # p(γ), (m,)
@@ -278,8 +277,6 @@ class SemanticGSLProblem:
     # ------------------------------------------------------------- closed forms
     def class_probs(self, class_prior=None) -> np.ndarray:
         """(n, k) p(o_c | z_c) under ``class_prior`` (default β), by the core's :func:`update_class_probs`."""
-        from psgsl_pgm import update_class_probs
-
         prior = self.background if class_prior is None else np.asarray(class_prior, dtype=np.float64)
         return update_class_probs(np.broadcast_to(prior, (self.n, self.k)), self.class_likelihood())
 
@@ -290,7 +287,7 @@ class SemanticGSLProblem:
             if class_prior == "marginal":
                 return self.marginal_class_prior()
             raise ValueError(f"class_prior must be 'background', 'marginal' or a (k,) array, got {class_prior!r}")
-        rho = _array(class_prior, "class_prior", 1)
+        rho = _array(class_prior, "class_prior", 1, keep_float32=True)
         if rho.shape != (self.k,):
             raise ValueError(f"class_prior must have shape ({self.k},), got {rho.shape}")
         return _distribution(rho, "class_prior")
@@ -313,8 +310,6 @@ class SemanticGSLProblem:
         posterior : (n,) ndarray
             Over cells in cell order, summing to 1.
         """
-        from psgsl_pgm import fuse, semantic_source_probability
-
         rho = self._class_prior(class_prior)
         semantic = semantic_source_probability(
             self.class_probs(rho),

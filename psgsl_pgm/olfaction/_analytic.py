@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import k0
 
-from ._grid import positive as _positive
+from .._validate import positive as _positive
 
 __all__ = [
     "correlation_length",

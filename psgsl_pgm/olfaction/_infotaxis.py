@@ -4,25 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import unit_interval
 from ._base import Observation, OlfactoryEstimator
 from ._plume import PlumeModel
 
 __all__ = ["GridInfotaxis"]
-
-
-def _unit_interval(value, name: str, *, low_open: bool, high_open: bool) -> float:
-    if isinstance(value, (bool, str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a number, got {value!r}") from None
-    lo_ok = v > 0 if low_open else v >= 0
-    hi_ok = v < 1 if high_open else v <= 1
-    if not (np.isfinite(v) and lo_ok and hi_ok):
-        interval = f"{'(' if low_open else '['}0, 1{')' if high_open else ']'}"
-        raise ValueError(f"{name} must lie in {interval}, got {value!r}")
-    return v
 
 
 class GridInfotaxis(OlfactoryEstimator):
@@ -139,8 +125,8 @@ class GridInfotaxis(OlfactoryEstimator):
         return cls.from_model(model, prior=prior, **opts)
 
     def _configure(self, tempering, false_hit_rate) -> None:
-        self.tempering = _unit_interval(tempering, "tempering", low_open=True, high_open=False)
-        self.false_hit_rate = _unit_interval(false_hit_rate, "false_hit_rate", low_open=False, high_open=True)
+        self.tempering = unit_interval(tempering, "tempering", low_open=True, high_open=False)
+        self.false_hit_rate = unit_interval(false_hit_rate, "false_hit_rate", low_open=False, high_open=True)
 
     # --- likelihood -----------------------------------------------------------------------------------------
     def log_likelihood(self, position, hit) -> np.ndarray:

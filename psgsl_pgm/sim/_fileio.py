@@ -6,11 +6,12 @@ field, so that a user with a hand-edited map knows what to fix.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 import yaml
+
+from .._validate import file_field
 
 __all__ = ["read_yaml_mapping", "check_keys", "number", "number_list", "read_grey_image", "resolve"]
 
@@ -43,20 +44,7 @@ def check_keys(where: str, data: dict, *, required=(), optional=()) -> None:
         raise ValueError(f"{where}: missing required key(s) {missing}")
 
 
-def number(where: str, field: str, value, *, positive=False, nonnegative=False, integer=False) -> float:
-    """A finite real number from a YAML field (bools and strings refused)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{where}: field '{field}' must be a number, got {type(value).__name__} {value!r}")
-    v = float(value)
-    if not math.isfinite(v):
-        raise ValueError(f"{where}: field '{field}' must be finite, got {value!r}")
-    if positive and v <= 0:
-        raise ValueError(f"{where}: field '{field}' must be > 0, got {value!r}")
-    if nonnegative and v < 0:
-        raise ValueError(f"{where}: field '{field}' must be >= 0, got {value!r}")
-    if integer and v != round(v):
-        raise ValueError(f"{where}: field '{field}' must be an integer, got {value!r}")
-    return v
+number = file_field  # the shared vocabulary's reader of a number from a file field
 
 
 def number_list(where: str, field: str, value, *, length=None, min_length=None) -> list[float]:

@@ -7,17 +7,16 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.signal import lfilter
 
+from .._validate import positive as check_positive
+
 __all__ = ["GasSensor", "GasReading", "Anemometer"]
 
 
 def _check_fields(obj, *, positive=()):
+    """Every field a finite number, > 0 for the fields named in ``positive`` and >= 0 for the others."""
     for f in fields(obj):
-        v = getattr(obj, f.name)
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not np.isfinite(v):
-            raise TypeError(f"{type(obj).__name__}.{f.name} must be a finite number, got {v!r}")
-        if v < 0 or (v == 0 and f.name in positive):
-            raise ValueError(f"{type(obj).__name__}.{f.name} must be {'> 0' if f.name in positive else '>= 0'}, got {v!r}")
-        object.__setattr__(obj, f.name, float(v))
+        name = f"{type(obj).__name__}.{f.name}"
+        object.__setattr__(obj, f.name, check_positive(getattr(obj, f.name), name, allow_zero=f.name not in positive))
 
 
 @dataclass(frozen=True)

@@ -9,13 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import index as as_index
+
 __all__ = ["approximation_error"]
-
-
-def _check_count(value, name: str, minimum: int) -> int:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name} must be an int >= {minimum}, got {value!r}")
-    return int(value)
 
 
 def approximation_error(cell_counts, *, n_problems=20, k=4, seed=0, max_observations=2, reference="closed_form"):
@@ -67,13 +63,13 @@ def approximation_error(cell_counts, *, n_problems=20, k=4, seed=0, max_observat
 
     if reference not in ("closed_form", "pgmpy"):
         raise ValueError(f"reference must be 'closed_form' or 'pgmpy', got {reference!r}")
-    counts = [_check_count(n, "cell_counts entries", 2) for n in np.atleast_1d(np.asarray(cell_counts)).tolist()]
+    counts = [as_index(n, "cell_counts entries", minimum=2) for n in np.atleast_1d(np.asarray(cell_counts)).tolist()]
     if not counts:
         raise ValueError("cell_counts must list at least one number of cells")
-    n_problems = _check_count(n_problems, "n_problems", 1)
-    k = _check_count(k, "k", 2)
-    seed = _check_count(seed, "seed", 0)
-    max_observations = _check_count(max_observations, "max_observations", 0)
+    n_problems = as_index(n_problems, "n_problems", minimum=1)
+    k = as_index(k, "k", minimum=2)
+    seed = as_index(seed, "seed")
+    max_observations = as_index(max_observations, "max_observations")
 
     tv = np.zeros((2, len(counts)))
     for a, n in enumerate(counts):  # loops over sizes and problems, each vectorised over cells
