@@ -10,6 +10,8 @@ Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on fu
 * :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
 * :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
   φ_O(p) (Sec. "Information Gain Optimization");
+* :class:`GridMap` — the occupancy grid every part of the package shares (frame, cell <-> world, coarsening,
+  8-connected free-space graph, the one light-tight line of sight);
 * :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts;
   :func:`kitchen_ontology`, :func:`kitchen_example` — the paper's kitchen example.
 
@@ -21,6 +23,7 @@ Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian net
 from ._beliefs import room_evidence, update_class_probs
 from ._fov import field_of_view, view_information_gain
 from ._fusion import fuse
+from ._grid import GridMap
 from ._infogain import semantic_information_gain
 from ._kitchen import kitchen_example
 from ._ontology import Ontology, kitchen_ontology
@@ -38,6 +41,7 @@ def load_world(path):
 
 
 __all__ = [
+    "GridMap",
     "Ontology",
     "field_of_view",
     "fuse",

@@ -5,41 +5,37 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_float_array, describe
+from ._sight import visible_from
+from ._validate import as_float_array, bool_mask, describe, positive, real_pair
 
 __all__ = ["field_of_view", "view_information_gain"]
 
-_SAMPLES_PER_CELL = 5  # line-of-sight samples per cell length along each ray
-
 
 def _occupancy(occupancy) -> np.ndarray:
-    occ = np.asarray(occupancy)
-    if occ.ndim != 2 or occ.size == 0:
-        raise ValueError(f"occupancy must be a non-empty (H, W) grid, got {describe(occ)}")
-    if occ.dtype != bool:
-        if not np.issubdtype(occ.dtype, np.number) or not np.all(np.isin(occ, (0, 1))):
-            raise TypeError(f"occupancy must be boolean (True = occupied) or 0/1, got {describe(occ)}")
-        occ = occ.astype(bool)
-    return occ
-
-
-def _positive(x, name, *, allow_zero=False) -> float:
-    if isinstance(x, (bool, np.bool_)) or not np.isscalar(x) or not np.isreal(x):
-        raise TypeError(f"{name} must be a real number, got {x!r}")
-    x = float(x)
-    if not np.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
-        raise ValueError(f"{name} must be {'non-negative' if allow_zero else 'positive'} and finite, got {x}")
-    return x
+    try:
+        return bool_mask(occupancy, "occupancy")
+    except TypeError:
+        raise TypeError(
+            f"occupancy must be boolean (True = occupied) or 0/1, got {describe(np.asarray(occupancy))}"
+        ) from None
 
 
 def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, resolution=1.0, origin=(0.0, 0.0)):
     """Cells seen by a camera at ``pose``: the set F_p of Sec. "Information Gain Optimization".
 
     A cell is visible when its centre lies within ``[min_range, max_range]`` of the camera and within
-    ``half_angle`` of its heading, and the segment from the camera to that centre crosses no occupied cell
-    other than the target itself (so walls and objects are seen, but nothing behind them). The segment is
-    tested at ``resolution / 5`` steps: an occupied cell clipped over a shorter stretch (a corner) does not
-    block, nor do two occupied cells that touch only at a corner.
+    ``half_angle`` of its heading, and the segment from the centre of the camera's cell to that centre
+    touches no occupied cell other than the target itself (so walls and objects are seen, but nothing behind
+    them). This is the package's one line-of-sight rule (:mod:`psgsl_pgm._sight`, the gas model's too): an
+    occupied cell blocks even where the segment only touches its corner, so a wall of cells that touch only
+    at their corners is light-tight. (Occlusion is traced from the camera cell's centre, range and angle from
+    the pose itself; on the robot's tour the camera stands at cell centres.)
+
+    Cost: shadow casting ring by ring around the camera cell (:func:`psgsl_pgm._sight.visible_from`), time
+    O(A log B) and memory O(H W / 8 + one ring + B) — A the cells within the rings up to where the shadows
+    close the view (in a room: about the room's cells, at most the cells within ``max_range``), B the number
+    of disjoint shadows; not range × rays. A full circle of 4 m on a 1 cm 1140 × 870 map stays within a few
+    MB. ``max_range`` beyond the map costs nothing more than the map.
 
     Parameters
     ----------
@@ -76,47 +72,32 @@ def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, reso
         raise ValueError(f"pose must be (x, y, heading), got {describe(p)}")
     if not np.all(np.isfinite(p)):
         raise ValueError(f"pose must be finite, got {p.tolist()}")
-    max_range = _positive(max_range, "max_range")
-    min_range = _positive(min_range, "min_range", allow_zero=True)
-    half_angle = _positive(half_angle, "half_angle")
+    max_range = positive(max_range, "max_range")
+    min_range = positive(min_range, "min_range", allow_zero=True)
+    half_angle = positive(half_angle, "half_angle")
     if half_angle > np.pi:
         raise ValueError(f"half_angle must be at most π, got {half_angle}")
     if min_range > max_range:
         raise ValueError(f"min_range ({min_range}) must not exceed max_range ({max_range})")
-    res = _positive(resolution, "resolution")
-    org = as_float_array(origin, "origin", dtype=np.float64, ndim=1)
-    if org.shape != (2,):
-        raise ValueError(f"origin must be (x, y), got {describe(org)}")
+    res = positive(resolution, "resolution")
+    org = real_pair(origin, "origin", "an (x, y)", "units of pose")
 
     h, w = occ.shape
     x, y, heading = p
     col0, row0 = (x - org[0]) / res, (y - org[1]) / res  # continuous grid coordinates of the camera
     if not (0 <= col0 < w and 0 <= row0 < h):
         raise ValueError(f"pose ({x}, {y}) lies outside the map (extent {w * res} × {h * res} from origin {org.tolist()})")
+    r0, c0 = int(row0), int(col0)
 
-    reach = int(np.ceil(max_range / res)) + 1
-    r_lo, r_hi = max(0, int(row0) - reach), min(h, int(row0) + reach + 1)
-    c_lo, c_hi = max(0, int(col0) - reach), min(w, int(col0) + reach + 1)
-    rows, cols = np.mgrid[r_lo:r_hi, c_lo:c_hi]
-    dx, dy = (cols + 0.5 - col0) * res, (rows + 0.5 - row0) * res
-    dist = np.hypot(dx, dy)
-    bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - heading)))  # wrapped to (−π, π]
-    candidate = (dist >= min_range) & (dist <= max_range) & ((np.abs(bearing) <= half_angle) | (dist < 1e-12 * res))
-    rows, cols = rows[candidate], cols[candidate]
+    def in_cone(rows, cols):  # range and opening angle, from the pose itself
+        dx, dy = (cols + 0.5 - col0) * res, (rows + 0.5 - row0) * res
+        dist = np.hypot(dx, dy)
+        bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - heading)))  # wrapped to (−π, π]
+        return (dist >= min_range) & (dist <= max_range) & ((np.abs(bearing) <= half_angle) | (dist < 1e-12 * res))
 
-    n_samples = max(2, int(np.ceil(_SAMPLES_PER_CELL * max_range / res)))
-    t = (np.arange(n_samples) + 0.5) / n_samples  # interior of each segment
-    sr = np.floor(row0 + t[None, :] * (rows + 0.5 - row0)[:, None]).astype(np.intp)
-    sc = np.floor(col0 + t[None, :] * (cols + 0.5 - col0)[:, None]).astype(np.intp)
-    np.clip(sr, 0, h - 1, out=sr)
-    np.clip(sc, 0, w - 1, out=sc)
-    is_target = (sr == rows[:, None]) & (sc == cols[:, None])
-    is_start = (sr == int(row0)) & (sc == int(col0))
-    blocked = np.any(occ[sr, sc] & ~is_target & ~is_start, axis=1)
-
-    visible = np.zeros((h, w), dtype=bool)
-    visible[rows[~blocked], cols[~blocked]] = True
-    return visible
+    reach = int(min(np.ceil(max_range / res) + 1, max(h, w)))
+    offset = float(np.hypot(col0 - c0 - 0.5, row0 - r0 - 0.5))  # camera to its cell centre, in cells
+    return visible_from(occ, (r0, c0), reach=reach, candidate=in_cone, cone=(float(heading), half_angle, offset))
 
 
 def view_information_gain(information_gain, occupancy, pose, **fov):

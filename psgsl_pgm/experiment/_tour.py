@@ -9,7 +9,8 @@ for every source, estimator and variant:
    category; the two bedrooms are two areas);
 3. order: from ``start``, go to the nearest unvisited area (geodesic distance), sweep its waypoints
    nearest-first, repeat;
-4. path: 8-connected geodesic shortest paths between consecutive waypoints (``scipy.sparse.csgraph``);
+4. path: 8-connected geodesic shortest paths without corner cutting between consecutive waypoints (the
+   core's :func:`psgsl_pgm._grid.free_space_graph`, ``scipy.sparse.csgraph``);
 5. stops: every ``stop_spacing`` metres of path; the camera looks along the direction of travel, and turns
    through four headings at every waypoint.
 """
@@ -20,8 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage as ndi
-from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
+
+from .._grid import free_space_graph
 
 __all__ = ["Tour", "exploration_tour"]
 
@@ -61,34 +63,6 @@ class Tour:
         n = int(n)
         return Tour(self.stops[:n], self.headings[:n], self.path, self.distance[:n], self.waypoint[:n],
                     self.path_index[:n])
-
-
-def _grid_graph(nav: np.ndarray, resolution: float):
-    """Sparse 8-connected graph over navigable cells (edge weight = centre distance, no corner cutting)."""
-    h, w = nav.shape
-    idx = np.full(nav.shape, -1, dtype=np.int64)
-    idx[nav] = np.arange(int(nav.sum()))
-
-    def src(d, n):  # cells whose neighbour at offset d exists
-        return slice(max(0, -d), n - max(0, d))
-
-    def dst(d, n):  # those neighbours
-        return slice(max(0, d), n - max(0, -d))
-
-    rows, cols, wts = [], [], []
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        a = idx[src(dr, h), src(dc, w)]
-        b = idx[dst(dr, h), dst(dc, w)]
-        ok = (a >= 0) & (b >= 0)
-        if dr and dc:  # a diagonal step needs both side cells free
-            ok &= (idx[dst(dr, h), src(dc, w)] >= 0) & (idx[src(dr, h), dst(dc, w)] >= 0)
-        rows.append(a[ok])
-        cols.append(b[ok])
-        wts.append(np.full(int(ok.sum()), resolution * np.hypot(dr, dc)))
-    n = int(nav.sum())
-    r, c, v = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
-    g = coo_matrix((np.concatenate([v, v]), (np.concatenate([r, c]), np.concatenate([c, r]))), shape=(n, n))
-    return g.tocsr(), idx
 
 
 def _path(pred: np.ndarray, target: int) -> list:
@@ -133,7 +107,8 @@ def exploration_tour(house, *, start=(0.8, 6.0), waypoint_spacing: float = 1.6, 
     res = grid.resolution
     blocked = house.robot_obstacles
     nav = ~blocked & (ndi.distance_transform_edt(~blocked) * res > clearance)
-    graph, idx = _grid_graph(nav, res)
+    graph = free_space_graph(nav, res)  # over row-major flat cell indices
+    idx = np.arange(nav.size).reshape(nav.shape)
     start_rc = tuple(int(v) for v in grid.world_to_cell(np.asarray(start, dtype=np.float64)))
     if not (0 <= start_rc[0] < nav.shape[0] and 0 <= start_rc[1] < nav.shape[1]) or not nav[start_rc]:
         raise ValueError(f"start {tuple(start)} must be a navigable position of the house (cell {start_rc})")
@@ -179,8 +154,7 @@ def exploration_tour(house, *, start=(0.8, 6.0), waypoint_spacing: float = 1.6, 
         nodes.extend(seg)
         is_wp.extend([False] * (len(seg) - 1) + [True])
         current = nxt
-    cells_of = np.argwhere(nav)  # node id -> (row, col), same order as idx
-    path = grid.cell_to_world(cells_of[np.array(nodes)])
+    path = grid.cell_to_world(np.stack(np.unravel_index(np.array(nodes), nav.shape), axis=-1))
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
     is_wp = np.array(is_wp)
     # stops: every stop_spacing of arc length, plus every waypoint

@@ -1,8 +1,8 @@
-"""Olfactory estimators p(s | g) of the gas source location from hit/miss readings (issue 5, part 1).
+"""Olfactory estimators p(s | g) of the gas source location from hit/miss readings.
 
 Two estimators share one interface (:class:`OlfactoryEstimator`: ``update(position, hit, wind)``,
 ``posterior``, ``reset()``) and one plume model (:class:`PlumeModel`: steady advection-diffusion on the
-occupancy grid with no-flux walls, absorbing outlets and the map's wind field, solved once with a sparse LU
+occupancy grid (:class:`psgsl_pgm.GridMap`) with no-flux walls, absorbing outlets and the map's wind field, solved once with a sparse LU
 factorisation; Green's functions for all candidate sources from one adjoint solve per sensor cell):
 
 * :class:`GridInfotaxis` — Bayesian hit/miss posterior with Poisson encounters, P(hit | s) = 1 − exp(−κ G)
@@ -25,7 +25,6 @@ from ._analytic import (
 )
 from ._base import Observation, OlfactoryEstimator
 from ._calibrate import encounter_scale_mle, fit_encounter_scale
-from ._grid import GridGeometry
 from ._hitmap import HitProbabilityMap
 from ._infotaxis import GridInfotaxis
 from ._operator import advection_diffusion_operator, bernoulli
@@ -33,7 +32,6 @@ from ._plume import PlumeModel
 from ._pmfs import PMFSEstimator
 
 __all__ = [
-    "GridGeometry",
     "GridInfotaxis",
     "HitProbabilityMap",
     "Observation",

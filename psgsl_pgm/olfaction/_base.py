@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import entr, logsumexp
 
-from ._grid import as_wind_vector
+from .._validate import as_float_array
 from ._plume import PlumeModel
+from ._wind_input import as_wind_vector
 
 __all__ = ["Observation", "OlfactoryEstimator"]
 
@@ -73,11 +74,7 @@ class OlfactoryEstimator(abc.ABC):
         if prior is None:
             log_prior = np.where(free, 0.0, -np.inf)
         else:
-            if isinstance(prior, (str, bytes)):
-                raise TypeError(f"prior must be a numeric (H, W) array, got {type(prior).__name__}")
-            p = np.asarray(prior)
-            if p.dtype == object or not np.issubdtype(p.dtype, np.number) or np.iscomplexobj(p):
-                raise TypeError(f"prior must be a real numeric (H, W) array, got dtype {p.dtype}")
+            p = as_float_array(prior, "prior", dtype=np.float64)
             if p.shape != self.geometry.shape:
                 raise ValueError(f"prior must have the map's shape {self.geometry.shape}, got {p.shape}")
             p = p.astype(np.float64).ravel()

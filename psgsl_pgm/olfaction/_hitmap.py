@@ -19,47 +19,13 @@ PMFS' form 1 − exp(−ω / ω0), with ω the accumulated kernel weight: conf_c
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from ._grid import GridGeometry, as_wind_vector, positive as _positive
+from .._grid import GridMap
+from .._validate import positive as _positive
+from ._wind_input import as_wind_vector
 
 __all__ = ["HitProbabilityMap"]
-
-
-def free_space_graph(free: np.ndarray, resolution: float) -> sp.csr_matrix:
-    """8-connected graph of free cells with edge lengths h and h√2 (diagonals only past two free cells).
-
-    Parameters
-    ----------
-    free : (H, W) ndarray of bool
-    resolution : float
-
-    Returns
-    -------
-    graph : (H*W, H*W) scipy.sparse.csr_matrix
-        Symmetric; row-major flat cell indices.
-    """
-    h, w = free.shape
-    idx = np.arange(h * w).reshape(h, w)
-    rows, cols, vals = [], [], []
-    # (dr, dc) with the two orthogonal cells a diagonal step passes (they must be free: no corner cutting)
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        r0, r1 = 0, h - dr
-        c0, c1 = max(0, -dc), w - max(0, dc)
-        a = (slice(r0, r1), slice(c0, c1))
-        b = (slice(r0 + dr, r1 + dr), slice(c0 + dc, c1 + dc))
-        ok = free[a] & free[b]
-        if dr and dc:
-            ok &= free[(slice(r0 + dr, r1 + dr), slice(c0, c1))] & free[(slice(r0, r1), slice(c0 + dc, c1 + dc))]
-        length = resolution * (np.sqrt(2.0) if (dr and dc) else 1.0)
-        ia, ib = idx[a][ok], idx[b][ok]
-        rows += [ia, ib]
-        cols += [ib, ia]
-        vals += [np.full(ia.size, length)] * 2
-    return sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(h * w, h * w)
-    )
 
 
 class HitProbabilityMap:
@@ -67,7 +33,7 @@ class HitProbabilityMap:
 
     Parameters
     ----------
-    geometry : GridGeometry
+    geometry : psgsl_pgm.GridMap
         The map.
     prior_hit : float, default 0.1
         p0 ∈ (0, 1): prior mean hit probability (PMFS' ``hitPriorProbability``).
@@ -86,8 +52,8 @@ class HitProbabilityMap:
     Examples
     --------
     >>> import numpy as np
-    >>> from psgsl_pgm.olfaction import GridGeometry
-    >>> hm = HitProbabilityMap(GridGeometry(np.zeros((5, 5), bool), resolution=0.1))
+    >>> from psgsl_pgm import GridMap
+    >>> hm = HitProbabilityMap(GridMap(np.zeros((5, 5), bool), 0.1))
     >>> hm.observe((2, 2), True)
     >>> round(float(hm.hit_probability[2, 2]), 3), float(hm.hit_probability[0, 0]) < 0.55
     (0.55, True)
@@ -95,7 +61,7 @@ class HitProbabilityMap:
 
     def __init__(
         self,
-        geometry: GridGeometry,
+        geometry: GridMap,
         *,
         prior_hit: float = 0.1,
         prior_strength: float = 1.0,
@@ -104,8 +70,8 @@ class HitProbabilityMap:
         confidence_scale: float = 0.5,
         cutoff: float = 3.0,
     ):
-        if not isinstance(geometry, GridGeometry):
-            raise TypeError(f"geometry must be a GridGeometry, got {type(geometry).__name__}")
+        if not isinstance(geometry, GridMap):
+            raise TypeError(f"geometry must be a psgsl_pgm.GridMap, got {type(geometry).__name__}")
         self.geometry = geometry
         self.prior_hit = _positive(prior_hit, "prior_hit")
         if not self.prior_hit < 1:
@@ -119,7 +85,7 @@ class HitProbabilityMap:
         self.kernel_stretch = float(kernel_stretch)
         self.confidence_scale = _positive(confidence_scale, "confidence_scale")
         self.cutoff = _positive(cutoff, "cutoff")
-        self._graph = free_space_graph(geometry.free, geometry.resolution)
+        self._graph = geometry.free_space_graph()
         self._centres = geometry.cell_centres().reshape(-1, 2)
         self.reset()
 

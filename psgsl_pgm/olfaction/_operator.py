@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._grid import GridGeometry
+from .._grid import GridMap
 
 __all__ = ["advection_diffusion_operator", "bernoulli"]
 
@@ -78,9 +78,10 @@ def _flux_coefficients(pe: np.ndarray, scheme: str) -> tuple[np.ndarray, np.ndar
 
 
 def advection_diffusion_operator(
-    geometry: GridGeometry,
+    geometry: GridMap,
     wind: np.ndarray,
     *,
+    outlets=None,
     diffusivity: float,
     lifetime: float,
     boundary: str = "wall",
@@ -90,10 +91,12 @@ def advection_diffusion_operator(
 
     Parameters
     ----------
-    geometry : GridGeometry
-        Occupancy, resolution h and outlets.
+    geometry : psgsl_pgm.GridMap
+        Occupancy and resolution h.
     wind : (H, W, 2) ndarray of float64
         Cell-centred wind (u_x, u_y) in m/s (validated; zero on occupied cells).
+    outlets : (H, W) ndarray of bool, optional
+        Free cells that absorb gas (c = 0 there); none by default.
     diffusivity : float
         Eddy diffusivity D in m²/s (> 0).
     lifetime : float
@@ -116,8 +119,8 @@ def advection_diffusion_operator(
     if boundary not in _BOUNDARIES:
         raise ValueError(f"boundary must be one of {_BOUNDARIES}, got {boundary!r}")
     h = geometry.resolution
-    active = geometry.free & ~geometry.outlets
-    outlet = geometry.outlets
+    outlet = np.zeros(geometry.shape, dtype=bool) if outlets is None else np.asarray(outlets, dtype=bool)
+    active = geometry.free & ~outlet
     index = np.full(geometry.shape, -1, dtype=np.int64)
     n = int(active.sum())
     index[active] = np.arange(n)

@@ -14,12 +14,27 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from ._grid import GridGeometry, as_wind_field, positive
+from .._grid import GridMap
+from .._validate import bool_mask, index as as_index, positive
 from ._operator import advection_diffusion_operator
+from ._wind_input import as_wind_field
 
 __all__ = ["PlumeModel"]
 
 _SOLVE_CHUNK = 64  # adjoint right-hand sides solved together
+
+
+def _outlets(outlets, grid: GridMap) -> np.ndarray:
+    """(H, W) read-only bool mask of the outlet cells (none by default); they must be free."""
+    if outlets is None:
+        out = np.zeros(grid.shape, dtype=bool)
+        out.flags.writeable = False
+        return out
+    out = bool_mask(outlets, "outlets", grid.shape)
+    if (out & grid.occupancy).any():
+        r, c = np.argwhere(out & grid.occupancy)[0]
+        raise ValueError(f"outlets must be free cells, got an outlet on occupied cell {(int(r), int(c))}")
+    return out
 
 
 def _as_rng(rng) -> np.random.Generator:
@@ -98,19 +113,21 @@ class PlumeModel:
         scheme: str = "exponential",
         cache_size: int = 512,
     ):
-        self.geometry = GridGeometry(occupancy, resolution=resolution, origin=origin, outlets=outlets)
+        self.geometry = GridMap(occupancy, resolution, origin)  # the map (psgsl_pgm.GridMap)
+        if self.geometry.occupancy.all():
+            raise ValueError("occupancy has no free cell: there is nowhere for a source or a sensor to be")
+        self.outlets = _outlets(outlets, self.geometry)
         self.wind = as_wind_field(wind, self.geometry.shape, self.geometry.free)
         self.diffusivity = positive(diffusivity, "diffusivity", "m²/s")
         self.lifetime = positive(lifetime, "lifetime", "s")
         self.encounter_scale = positive(encounter_scale, "encounter_scale", "m²/s")
-        if isinstance(cache_size, bool) or not isinstance(cache_size, (int, np.integer)) or cache_size < 0:
-            raise ValueError(f"cache_size must be a non-negative integer, got {cache_size!r}")
-        self.cache_size = int(cache_size)
+        self.cache_size = as_index(cache_size, "cache_size")
         self.boundary = boundary
         self.scheme = scheme
         A, index = advection_diffusion_operator(
             self.geometry,
             self.wind,
+            outlets=self.outlets,
             diffusivity=self.diffusivity,
             lifetime=self.lifetime,
             boundary=boundary,
@@ -131,10 +148,14 @@ class PlumeModel:
 
         ``wind`` is an (H, W, 2) array_like in m/s (or ``None``); other keywords as in the constructor.
         """
-        geo = GridGeometry.from_grid_map(grid_map, outlets=outlets)
-        return cls(
-            geo.occupancy, resolution=geo.resolution, origin=geo.origin, wind=wind, outlets=outlets, **kwargs
-        )
+        missing = [a for a in ("occupancy", "resolution", "origin") if not hasattr(grid_map, a)]
+        if missing:
+            raise TypeError(
+                f"grid_map must have .occupancy, .resolution and .origin; {type(grid_map).__name__} lacks "
+                f"{', '.join('.' + m for m in missing)}"
+            )
+        return cls(grid_map.occupancy, resolution=grid_map.resolution, origin=grid_map.origin, wind=wind,
+                   outlets=outlets, **kwargs)
 
     # --- geometry -------------------------------------------------------------------------------------------
     @property

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import unit_interval
 from ._base import Observation, OlfactoryEstimator
 from ._hitmap import HitProbabilityMap
 from ._plume import PlumeModel
@@ -121,12 +122,7 @@ class PMFSEstimator(OlfactoryEstimator):
         unknown = set(hitmap) - set(_HITMAP_KEYS)
         if unknown:
             raise TypeError(f"unexpected keyword argument(s) {sorted(unknown)}; hit-map options are {_HITMAP_KEYS}")
-        if isinstance(discrimination, (bool, str, bytes)) or discrimination is None:
-            raise TypeError(f"discrimination must be a number in (0, 1), got {discrimination!r}")
-        g = float(discrimination)
-        if not (0 < g < 1):
-            raise ValueError(f"discrimination must lie in (0, 1), got {discrimination!r}")
-        self.discrimination = g
+        self.discrimination = unit_interval(discrimination, "discrimination", low_open=True, high_open=True)
         self._hitmap = HitProbabilityMap(model.geometry, **hitmap)
 
     # --- state ----------------------------------------------------------------------------------------------

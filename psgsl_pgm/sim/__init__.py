@@ -2,7 +2,7 @@
 
 Lightweight, seeded, vectorised substitutes for the lab's tool chain:
 
-* environments — :class:`GridMap`, ROS ``map_server`` maps (:func:`load_ros_map`), room-category maps
+* environments — :class:`GridMap` (the core's ``psgsl_pgm.GridMap``), ROS ``map_server`` maps (:func:`load_ros_map`), room-category maps
   (:func:`load_room_map`), object lists (:func:`load_objects`), and the embedded :func:`default_house`;
 * wind — potential flow between inlet and outlet windows with a slow divergence-free perturbation
   (:func:`potential_flow`, :func:`make_wind`), or a GADEN CFD export (:func:`read_gaden_wind_csv`);
@@ -17,14 +17,14 @@ Modelling choice: walls block wind, gas, the camera and the robot; furniture is 
 camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`).
 """
 
+from .._grid import GridMap  # the core's grid (psgsl_pgm.GridMap), re-exported for simulator users
+from .._sight import LineOfSightCache, cells_clear  # the core's one line-of-sight rule
 from ._camera import Camera, Frame, take_frame
 from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
 from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
-from ._gridmap import GridMap
 from ._house import House, default_house, segment_mask
-from ._los import LineOfSightCache, cells_clear
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
 from ._plot import plot_house
 from ._rosmap import load_ros_map, save_ros_map

@@ -1,7 +1,7 @@
 """Camera frames: what a camera at a pose sees of the house, and what the detector reports there.
 
 The horizontal field of view is the core :func:`psgsl_pgm.field_of_view` on the walls (furniture is low and
-does not hide anything in 2-D). Only free cells are observed (walls are not part of any object class). With
+does not hide anything in 2-D): the same light-tight line of sight as the gas model's. Only free cells are observed (walls are not part of any object class). With
 voxel layers, a voxel of a visible column is in view when its centre lies within the camera's vertical
 half-angle.
 """
@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._fov import field_of_view
 from ._classes import OTHER, match_names
 from ._detector import DetectorModel
 
@@ -50,8 +51,6 @@ class Camera:
 
     def visible(self, grid, pose) -> np.ndarray:
         """(H, W) bool: free cells in view from ``pose`` = (x, y, heading)."""
-        from psgsl_pgm import field_of_view
-
         seen = field_of_view(grid.occupancy, pose, max_range=self.max_range, half_angle=self.half_angle,
                              min_range=self.min_range, resolution=grid.resolution, origin=grid.origin)
         return seen & grid.free

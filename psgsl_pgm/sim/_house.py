@@ -18,7 +18,7 @@ import numpy as np
 import scipy.ndimage as ndi
 
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER
-from ._gridmap import GridMap
+from .._grid import GridMap
 from ._objects import SceneObject, box_footprint
 
 __all__ = ["House", "default_house", "segment_mask"]

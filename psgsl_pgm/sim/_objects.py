@@ -22,7 +22,7 @@ import numpy as np
 import yaml
 
 from ._fileio import check_keys, number, number_list, read_yaml_mapping
-from ._gridmap import GridMap
+from .._grid import GridMap
 
 __all__ = ["SceneObject", "box_footprint", "load_objects", "save_objects"]
 

@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 
 from ._fileio import check_keys, number, read_grey_image, read_yaml_mapping, resolve
-from ._gridmap import GridMap
+from .._grid import GridMap
 
 __all__ = ["load_room_map", "save_room_map"]
 

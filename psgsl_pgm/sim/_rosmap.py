@@ -16,7 +16,7 @@ import numpy as np
 import yaml
 
 from ._fileio import check_keys, number, number_list, read_grey_image, read_yaml_mapping, resolve
-from ._gridmap import GridMap
+from .._grid import GridMap
 
 __all__ = ["load_ros_map", "save_ros_map"]
 

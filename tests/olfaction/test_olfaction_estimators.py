@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.special import logsumexp
 
+from psgsl_pgm import GridMap
 from psgsl_pgm.olfaction import (
-    GridGeometry,
     GridInfotaxis,
     HitProbabilityMap,
     OlfactoryEstimator,
@@ -172,7 +172,7 @@ def test_hit_map_is_a_kernel_weighted_beta_posterior_blocked_by_walls():
     occ = np.zeros((9, 15), bool)
     occ[:, 7] = True
     occ[7, 7] = False  # one door, far from the sensor
-    hm = HitProbabilityMap(GridGeometry(occ, resolution=0.1), prior_hit=0.2, prior_strength=2.0,
+    hm = HitProbabilityMap(GridMap(occ, 0.1), prior_hit=0.2, prior_strength=2.0,
                            kernel_sigma=0.15, cutoff=4.0)
     readings = [((2, 5), True, (0.0, 0.0)), ((2, 5), False, (0.3, 0.0)), ((3, 6), True, (0.0, -0.2))]
     weights = []
@@ -190,12 +190,12 @@ def test_hit_map_is_a_kernel_weighted_beta_posterior_blocked_by_walls():
     # still air: cutoff 4σ = 0.6 m; the cells behind the wall are 0.3 m away in a straight line, but 1.2 m and
     # more along free space (through the door): exactly zero weight there, unlike on the same map without wall
     assert (k[0, :, 8:] == 0).all()
-    no_wall = HitProbabilityMap(GridGeometry(np.zeros((9, 15), bool), resolution=0.1), kernel_sigma=0.15, cutoff=4.0)
+    no_wall = HitProbabilityMap(GridMap(np.zeros((9, 15), bool), 0.1), kernel_sigma=0.15, cutoff=4.0)
     assert no_wall.kernel((2, 5)).reshape(9, 15)[2, 8] == pytest.approx(np.exp(-0.5 * 4), rel=1e-12)
     # with wind the kernel reaches through the door, evaluated at the geodesic, not the straight, distance
     assert 0 < k[1, 0, 8] < np.exp(-0.5 * (1.2 / 0.45) ** 2)
     # a wind stretches the kernel along itself: along-wind weight > cross-wind weight at equal distance
-    hm2 = HitProbabilityMap(GridGeometry(np.zeros((11, 11), bool), resolution=0.1), kernel_sigma=0.1)
+    hm2 = HitProbabilityMap(GridMap(np.zeros((11, 11), bool), 0.1), kernel_sigma=0.1)
     kk = hm2.kernel((5, 5), (0.2, 0.0)).reshape(11, 11)
     assert kk[5, 7] > kk[7, 5] and kk[5, 3] == pytest.approx(kk[5, 7], rel=1e-12)
     iso = hm2.kernel((5, 5), None).reshape(11, 11)
@@ -325,7 +325,7 @@ def test_bad_inputs_raise_with_clear_messages():
         with pytest.raises(ValueError, match=r"positions must have shape \(n, 2\)"):
             est.information_gain((0.05, 0.05))
         assert est.n_observations == 0  # nothing was applied
-    hm = HitProbabilityMap(GridGeometry(occ, resolution=0.1))
+    hm = HitProbabilityMap(GridMap(occ, 0.1))
     with pytest.raises(ValueError, match=r"cell \(1, 1\) is occupied"):
         hm.observe((1, 1), True)
     with pytest.raises(ValueError, match="outside the 4 x 5 grid"):
@@ -333,4 +333,4 @@ def test_bad_inputs_raise_with_clear_messages():
     with pytest.raises(TypeError, match="hit must be a bool"):
         hm.observe((0, 0), 1.0)
     with pytest.raises(ValueError, match="prior_hit must lie in"):
-        HitProbabilityMap(GridGeometry(occ, resolution=0.1), prior_hit=1.0)
+        HitProbabilityMap(GridMap(occ, 0.1), prior_hit=1.0)

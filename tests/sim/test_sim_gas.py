@@ -21,7 +21,7 @@ from psgsl_pgm.sim import (
 # ---- line of sight -------------------------------------------------------------------------------------------
 def _touches(a, b, r, c):
     """Does the segment between the centres of cells a and b meet the closed square of cell (r, c)?
-    Exact integer geometry in doubled coordinates (independent of the traversal in _los)."""
+    Exact integer geometry in doubled coordinates (independent of the traversal in psgsl_pgm._sight)."""
     ax, ay, bx, by = 2 * a[1] + 1, 2 * a[0] + 1, 2 * b[1] + 1, 2 * b[0] + 1
     x0, x1, y0, y1 = 2 * c, 2 * c + 2, 2 * r, 2 * r + 2
     if max(ax, bx) < x0 or min(ax, bx) > x1 or max(ay, by) < y0 or min(ay, by) > y1:
