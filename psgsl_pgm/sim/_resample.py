@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._gridmap import GridMap, block_mean
+from .._grid import GridMap, block_mean
 
 __all__ = ["coarsen_factor", "coarsen_labels", "coarsen_occupancy"]
 
@@ -32,8 +32,7 @@ def coarsen_occupancy(grid: GridMap, factor: int) -> GridMap:
     """
     if factor == 1:
         return grid
-    frac = block_mean(grid.occupancy.astype(np.float64), factor, pad_value=1.0)
-    return GridMap(frac > 0.0, grid.resolution * factor, grid.origin)
+    return grid.coarsen(factor, occupied_fraction="any")
 
 
 def coarsen_labels(labels: np.ndarray, n_labels: int, factor: int) -> np.ndarray:

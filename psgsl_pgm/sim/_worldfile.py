@@ -43,7 +43,7 @@ import numpy as np
 
 from .._coco import canonical_class
 from ._fileio import check_keys, number, number_list, read_grey_image, read_yaml_mapping, resolve
-from ._gridmap import GridMap
+from .._grid import GridMap
 from ._house import House, default_house, segment_mask
 from ._objects import SceneObject, load_objects
 from ._resample import coarsen_factor, coarsen_labels, coarsen_occupancy
