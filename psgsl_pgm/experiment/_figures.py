@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..sim._plot import map_norm, plot_cell_map
 from ._config import VARIANTS
 from ._summary import aligned
 
@@ -12,23 +13,12 @@ __all__ = ["plot_error_chart", "plot_progression", "plot_room_types"]
 _COLOURS = {"olfaction": "tab:grey", "semantics": "tab:blue", "semantics+rooms": "tab:orange"}
 
 
-def _walls(ax, house):
-    g = house.grid
-    ax.imshow(np.ma.masked_where(~g.occupancy, g.occupancy), origin="lower", extent=g.extent, cmap="Greys",
-              vmin=0, vmax=1, interpolation="nearest")
-
-
-def _prob_map(ax, house, p, title, vmax=None):
-    g = house.grid
-    masked = np.ma.masked_where(g.occupancy, p)
-    vmax = float(masked.max()) if vmax is None else float(vmax)
-    im = ax.imshow(masked, origin="lower", extent=g.extent, cmap="viridis", interpolation="nearest",
-                   vmin=0, vmax=vmax if vmax > 0 else 1.0)
-    _walls(ax, house)
-    ax.set_title(title, fontsize=9)
-    ax.set_xticks([])
-    ax.set_yticks([])
-    return im
+def _prob_map(ax, house, p, title, norm):
+    """One panel of p(s | ·) through the package's one map plotter (the caller draws the shared colour bar)."""
+    plot_cell_map(np.where(house.grid.occupancy, np.nan, p), house=house, ax=ax, norm=norm, colorbar=False,
+                  title=title)
+    ax.title.set_fontsize(9)
+    return ax.images[0]
 
 
 def plot_error_chart(runs, *, ax=None, points: int = 201):
@@ -70,8 +60,13 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
     return fig
 
 
-def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+rooms")):
+def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+rooms"), dynamic_range=1e4):
     """Fig. progression: the source distribution at the snapshot steps of ``run``, with the robot path.
+
+    One colour scale per row (variant), shared by all its snapshots and shown by the row's colour bar. The
+    scale is logarithmic: as the search proceeds the mass concentrates on a few cells (at the end of an oven
+    search ten cells can hold 90 % of it), and a linear scale would show the earlier, flatter snapshots of
+    the same row as blank. Cells below ``max / dynamic_range`` get the lowest colour.
 
     Parameters
     ----------
@@ -83,6 +78,8 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
         The run's tour (the path drawn dashed up to each snapshot).
     variants : sequence of str, keyword-only
         Rows of the figure.
+    dynamic_range : float, default 1e4, keyword-only
+        Decades shown by each row's log scale (vmin = vmax / dynamic_range).
 
     Returns
     -------
@@ -93,20 +90,29 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
     steps = sorted(run.snapshots)
     if not steps:
         raise ValueError("the run has no snapshots: call run_search(..., snapshot_at=[...])")
-    fig, axes = plt.subplots(len(variants), len(steps), figsize=(2.3 * len(steps), 2.7 * len(variants)),
-                             squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(len(variants), len(steps), figsize=(2.3 * len(steps) + 1.2, 2.9 * len(variants)),
+                             squeeze=False, layout="constrained", sharex=True, sharey=True)
     n = run.n_steps
+    free = ~house.grid.occupancy
     for i, name in enumerate(variants):
         v = VARIANTS.index(name)
+        norm = map_norm(*(run.snapshots[s][v][free] for s in steps), log=True, dynamic_range=dynamic_range)
         for j, s in enumerate(steps):
             ax = axes[i, j]
-            _prob_map(ax, house, run.snapshots[s][v], f"{name}, {100 * s / n:.0f} %")
+            im = _prob_map(ax, house, np.maximum(run.snapshots[s][v], norm.vmin), f"{name}, {100 * s / n:.0f} %",
+                           norm)
             if s > 0:
                 reached = tour.path[: tour.path_index[s - 1] + 1]  # up to stop s (1-based steps)
                 ax.plot(reached[:, 0], reached[:, 1], "w--", lw=0.8)
                 ax.plot(*run.position[s], "wo", ms=3)
             ax.plot(*run.source_xy, marker="*", color="red", ms=9, mec="white", mew=0.5)
-    fig.suptitle("p(s | ·) during the search (dashed: robot path; star: true source)", fontsize=10)
+            if i < len(variants) - 1:
+                ax.set_xlabel("")
+            if j > 0:
+                ax.set_ylabel("")
+        fig.colorbar(im, ax=list(axes[i]), shrink=0.9, label=f"p(s_c | ·), {name} (log)")
+    fig.suptitle("p(s | ·) during the search (dashed: robot path; white dot: robot; star: true source)",
+                 fontsize=10)
     return fig
 
 
@@ -128,12 +134,13 @@ def plot_room_types(semantic_plain, semantic_rooms, house, *, source=None):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(8.0, 4.6), layout="constrained")
-    top = max(float(np.max(semantic_plain)), float(np.max(semantic_rooms)))  # one colour scale for both
+    free = ~house.grid.occupancy
+    norm = map_norm(semantic_plain[free], semantic_rooms[free])  # one linear colour scale for both panels
     for ax, p, t in zip(axes, (semantic_plain, semantic_rooms),
                         ("(A) no previous information", "(B) room-category map")):
-        im = _prob_map(ax, house, p, t, vmax=top)
+        im = _prob_map(ax, house, p, t, norm)
         if source is not None:
             ax.plot(*source, marker="*", color="red", ms=9, mec="white", mew=0.5)
-    fig.colorbar(im, ax=list(axes), shrink=0.8, label="p(s_c | ·)")
+    fig.colorbar(im, ax=list(axes), shrink=0.8, label="p(s_c | ·) per cell")
     fig.suptitle("Source distribution at the start of the search", fontsize=10)
     return fig

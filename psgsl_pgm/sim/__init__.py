@@ -11,7 +11,9 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment;
 * :func:`load_world` — a user's house from a world file (map, rooms, objects, ontology, wind, sources); the
-  embedded house is the world :func:`default_world`.
+  embedded house is the world :func:`default_world`;
+* drawing — the package's one map plotter: :func:`plot_house`, :func:`plot_cell_map` (a value per cell with
+  its colour bar) and :func:`map_norm` (one colour scale across compared panels); matplotlib on call only.
 
 Modelling choice: walls block wind, gas, the camera and the robot; furniture is low, so wind, gas and the
 camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`).
@@ -26,7 +28,7 @@ from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._house import House, default_house, segment_mask
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
-from ._plot import plot_house
+from ._plot import map_norm, plot_cell_map, plot_house
 from ._rosmap import load_ros_map, save_ros_map
 from ._roommap import load_room_map, save_room_map
 from ._semantic_map import SemanticMap
@@ -68,8 +70,10 @@ __all__ = [
     "load_room_map",
     "make_wind",
     "make_world",
+    "map_norm",
     "match_names",
     "navigable",
+    "plot_cell_map",
     "plot_house",
     "potential_flow",
     "read_gaden_config",

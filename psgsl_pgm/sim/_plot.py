@@ -1,4 +1,14 @@
-"""Drawing the house, its wind and a gas snapshot with matplotlib (imported on call, never at import time)."""
+"""The one map plotter: the house, any value per cell, and one colour scale across compared panels.
+
+Every drawing of a grid map in the package goes through here — the simulator's :func:`plot_house`, the
+teaching notebooks' maps (``psgsl_pgm.teaching.plot_cell_map`` is :func:`plot_cell_map`) and the validation
+figures of ``psgsl_pgm.experiment`` (Fig. ``progression``, ``room-types``). matplotlib is imported inside
+the functions, never when the package is imported.
+
+Conventions: a map is an (H, W) array, row index ↔ y, column index ↔ x (the grid's convention), drawn with
+``origin="lower"`` over the grid's extent in metres; axes are labelled ``x [m]`` / ``y [m]`` (``column`` /
+``row`` in cells without a grid); colour that carries a value always gets a colour bar.
+"""
 
 from __future__ import annotations
 
@@ -6,11 +16,202 @@ import numpy as np
 
 from ._classes import OTHER
 
-__all__ = ["plot_house"]
+__all__ = ["draw_walls", "map_norm", "object_label_positions", "plot_cell_map", "plot_house"]
+
+
+def _grid_of(house, grid):
+    if house is not None and grid is not None:
+        raise ValueError("pass house= or grid=, not both")
+    return house.grid if house is not None else grid
+
+
+def map_norm(*maps, log: bool = False, dynamic_range: float | None = None):
+    """One colour scale for several maps (panels that are compared must share it).
+
+    Parameters
+    ----------
+    *maps : array_like
+        The maps (any shapes); NaN and ±inf are ignored, and so are values <= 0 on a log scale.
+    log : bool, default False, keyword-only
+        A logarithmic scale (``LogNorm``) instead of a linear one from 0.
+    dynamic_range : float, optional, keyword-only
+        Log scale only: the lower end is at least ``vmax / dynamic_range`` (e.g. 1e4 shows four decades
+        below the largest value; smaller values are drawn in the lowest colour).
+
+    Returns
+    -------
+    matplotlib.colors.Normalize or matplotlib.colors.LogNorm
+        Linear: [0, max] (or [min, max] when a value is negative). Log: [min positive, max].
+
+    Raises
+    ------
+    ValueError
+        No finite (positive, for ``log``) value in any map, or ``dynamic_range`` not > 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.sim import map_norm
+    >>> n = map_norm(np.array([0.0, 0.2]), np.array([0.5, np.nan]))
+    >>> float(n.vmin), float(n.vmax)
+    (0.0, 0.5)
+    >>> n = map_norm(np.array([1e-9, 1e-2]), log=True, dynamic_range=1e3)
+    >>> float(n.vmin), float(n.vmax)
+    (1e-05, 0.01)
+    """
+    from matplotlib.colors import LogNorm, Normalize
+
+    if dynamic_range is not None and not (np.isfinite(dynamic_range) and dynamic_range > 1):
+        raise ValueError(f"dynamic_range must be a finite number > 1, got {dynamic_range!r}")
+    values = np.concatenate([np.asarray(m, dtype=np.float64).ravel() for m in maps]) if maps else np.empty(0)
+    keep = np.isfinite(values) & ((values > 0) if log else True)
+    if not keep.any():
+        raise ValueError("map_norm needs at least one finite" + (" positive" if log else "") + " value")
+    lo, hi = float(values[keep].min()), float(values[keep].max())
+    if log:
+        if dynamic_range is not None:
+            lo = max(lo, hi / dynamic_range)
+        return LogNorm(vmin=lo, vmax=hi if hi > lo else lo * 10)
+    lo = min(lo, 0.0)
+    return Normalize(vmin=lo, vmax=hi if hi > lo else lo + 1.0)
+
+
+def draw_walls(ax, grid, *, colour: str = "black"):
+    """Draw the occupied cells of ``grid`` (walls) in one colour on top of ``ax``; return the image."""
+    from matplotlib.colors import ListedColormap
+
+    occ = np.asarray(grid.occupancy, dtype=bool)
+    return ax.imshow(np.ma.masked_where(~occ, occ), origin="lower", extent=grid.extent,
+                     cmap=ListedColormap([colour]), interpolation="nearest")
+
+
+def _label_axes(ax, grid):
+    if grid is None:
+        ax.set_xlabel("column (cell)")
+        ax.set_ylabel("row (cell)")
+    else:
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+
+
+def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="viridis", log=False, norm=None,
+                  colorbar=True, label="value per cell", walls=True):
+    """Draw one number per cell (a probability map, an information-gain map) as an image.
+
+    Parameters
+    ----------
+    values : (H, W) array_like
+        One number per cell; row index ↔ y, column index ↔ x. NaN cells are left blank.
+    house : psgsl_pgm.sim.House, optional, keyword-only
+        Gives the extent in metres and the walls (drawn black). Without it (and without ``grid``) the axes
+        are in cells.
+    grid : GridMap, optional, keyword-only
+        Instead of ``house``.
+    ax : matplotlib Axes, optional, keyword-only
+    title : str, optional, keyword-only
+    cmap : str, keyword-only
+    log : bool, keyword-only
+        Logarithmic colour scale (values <= 0 are left blank). Ignored when ``norm`` is given.
+    norm : matplotlib Normalize, optional, keyword-only
+        A colour scale shared with other panels (:func:`map_norm`); default: this map's own range.
+    colorbar : bool, keyword-only
+        Draw a colour bar (pass False only when a shared bar is drawn by the caller).
+    label : str, keyword-only
+        Colour-bar label (say what the value is, with units).
+    walls : bool, keyword-only
+        Draw the walls of ``house``/``grid`` on top.
+
+    Returns
+    -------
+    matplotlib Axes
+        With the value image as ``ax.images[0]``.
+
+    Raises
+    ------
+    ValueError
+        ``values`` not 2-D, or not of the grid's shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.sim import plot_cell_map
+    >>> ax = plot_cell_map(np.arange(12.0).reshape(3, 4), title="cells", label="index")
+    >>> ax.get_title(), ax.get_xlabel(), ax.images[0].colorbar.ax.get_ylabel()
+    ('cells', 'column (cell)', 'index')
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
+
+    g = _grid_of(house, grid)
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim != 2:
+        raise ValueError(f"values must be an (H, W) map, got shape {v.shape}")
+    if g is not None and v.shape != tuple(g.shape):
+        raise ValueError(f"values must have the house's shape {tuple(g.shape)}, got {v.shape}")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 5))
+    log = isinstance(norm, LogNorm) if norm is not None else log
+    shown = np.ma.masked_where(~np.isfinite(v) | ((v <= 0) if log else False), v)
+    if norm is None and shown.count():
+        norm = map_norm(shown.compressed(), log=log)
+    extent = None if g is None else g.extent
+    image = ax.imshow(shown, origin="lower", extent=extent, cmap=cmap, norm=norm, interpolation="nearest")
+    if g is not None and walls:
+        draw_walls(ax, g)
+    _label_axes(ax, g)
+    if colorbar:
+        ax.figure.colorbar(image, ax=ax, shrink=0.8, label=label)
+    if title is not None:
+        ax.set_title(title)
+    ax.set_aspect("equal")
+    return ax
+
+
+def object_label_positions(house) -> np.ndarray:
+    """(n_objects, 2) a point (metres) inside the *visible* part of each object, for its label.
+
+    An object drawn over another (the oven standing in a countertop) hides part of it; the label of each
+    object goes to the visible cell deepest inside what is visible of it (largest distance to its border),
+    so no label sits on another object. An object with no visible cell keeps its centroid.
+    """
+    g = house.grid
+    owner = np.full(house.shape, -1, dtype=np.int64)
+    for i, m in enumerate(house.object_masks):  # later objects are drawn over earlier ones (as in class_map)
+        owner[m] = i
+    centres = g.cell_centres()
+    out = np.empty((len(house.objects), 2))
+    for i, o in enumerate(house.objects):  # one distance transform per object
+        visible = owner == i
+        out[i] = _deepest(visible, centres, o.center) if visible.any() else o.center
+    return out
+
+
+def _deepest(mask, centres, target):
+    """Centre of the cell of ``mask`` farthest from its border (ties: nearest ``target``); NaN if empty."""
+    import scipy.ndimage as ndi
+
+    if not mask.any():
+        return np.full(2, np.nan)
+    depth = ndi.distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
+    near = -np.linalg.norm(centres - target, axis=-1) * 1e-6
+    return centres[np.unravel_index(np.argmax(np.where(mask, depth + near, -np.inf)), mask.shape)]
+
+
+def _room_label_positions(house, objects: bool) -> np.ndarray:
+    """(n_rooms, 2) a point on the open floor of each room (off the furniture when it is drawn)."""
+    centres = house.grid.cell_centres()
+    open_floor = ~house.furniture if objects and house.objects else np.ones(house.shape, bool)
+    out = np.empty((len(house.room_names), 2))
+    for i in range(len(house.room_names)):  # one distance transform per room
+        room = house.room_labels == i
+        target = centres[room].mean(axis=0) if room.any() else np.zeros(2)
+        out[i] = _deepest(room & open_floor, centres, target) if (room & open_floor).any() else \
+            _deepest(room, centres, target)
+    return out
 
 
 def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, rooms: bool = True,
-               objects: bool = True, labels: bool = True, wind_stride: int = 4):
+               objects: bool = True, labels: bool = True, wind_stride: int = 4, colorbar: bool = True):
     """Draw a :class:`House`: rooms, walls, windows, objects, and optionally wind and gas.
 
     Parameters
@@ -21,12 +222,15 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
     wind : WindField, optional, keyword-only
         Drawn as arrows every ``wind_stride`` cells.
     concentration : (H, W) ndarray, optional, keyword-only
-        Gas concentration (ppm), drawn with transparency over the rooms.
+        Gas concentration (ppm), drawn with transparency over the rooms, with a colour bar.
     source : (2,) array_like, optional, keyword-only
-        Gas source position, drawn as a star.
+        Gas source position, drawn as a red star.
     rooms, objects, labels : bool, keyword-only
-        Shade rooms; fill object cells by class; write room and class names.
+        Shade rooms; fill object cells by class; write room and object class names (each object's name on
+        its visible part, :func:`object_label_positions`).
     wind_stride : int, keyword-only
+    colorbar : bool, keyword-only
+        Colour bar of ``concentration``.
 
     Returns
     -------
@@ -52,9 +256,10 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
     if concentration is not None:
         c = np.asarray(concentration, dtype=np.float64)
         c = np.ma.masked_where(~np.isfinite(c) | (c <= 0), c)  # nan = not computed (strided field)
-        ax.imshow(c, origin="lower", extent=ext, cmap="magma_r", alpha=0.7, interpolation="nearest")
-    ax.imshow(np.ma.masked_where(~g.occupancy, g.occupancy), origin="lower", extent=ext,
-              cmap=ListedColormap(["black"]), interpolation="nearest")
+        im = ax.imshow(c, origin="lower", extent=ext, cmap="magma_r", alpha=0.7, interpolation="nearest")
+        if colorbar:
+            ax.figure.colorbar(im, ax=ax, shrink=0.7, label="gas concentration [ppm]")
+    draw_walls(ax, g)
     for mask, colour in ((house.inlet, "tab:blue"), (house.outlet, "tab:red")):
         ax.imshow(np.ma.masked_where(~mask, mask), origin="lower", extent=ext, cmap=ListedColormap([colour]),
                   interpolation="nearest")
@@ -65,21 +270,17 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
         ax.quiver(xy[..., 0][keep], xy[..., 1][keep], v[..., 0][keep], v[..., 1][keep], color="tab:blue",
                   angles="xy", scale_units="xy", scale=0.5, width=0.002)
     if labels:
-        for i, name in enumerate(house.room_names):
-            rr, cc = np.nonzero(house.room_labels == i)
-            if rr.size:
-                x, y = g.cell_to_world(np.array([int(np.median(rr)), int(np.median(cc))]))
-                ax.text(x, y, name, ha="center", va="center", fontsize=9, alpha=0.6)
-        if objects:
-            for o in house.objects:
-                x, y = o.center
-                ax.text(x, y, o.class_name, ha="center", va="center", fontsize=6)
+        for name, (x, y) in zip(house.room_names, _room_label_positions(house, objects)):
+            if np.isfinite(x):
+                ax.text(x, y, name, ha="center", va="center", fontsize=9, alpha=0.6, clip_on=True)
+        if objects and house.objects:
+            for o, (x, y) in zip(house.objects, object_label_positions(house)):
+                ax.text(x, y, o.class_name, ha="center", va="center", fontsize=6, clip_on=True)
     if source is not None:
         sx, sy = np.asarray(source, dtype=float)[:2]
         ax.plot(sx, sy, marker="*", color="red", markersize=14, markeredgecolor="k")
     ax.set_xlim(ext[0], ext[1])
     ax.set_ylim(ext[2], ext[3])
     ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    _label_axes(ax, g)
     return ax
