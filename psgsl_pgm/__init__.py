@@ -13,7 +13,8 @@ Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on fu
 * :class:`GridMap` — the occupancy grid every part of the package shares (frame, cell <-> world, coarsening,
   8-connected free-space graph, the one light-tight line of sight);
 * :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts;
-  :func:`kitchen_ontology`, :func:`kitchen_example` — the paper's kitchen example.
+  :func:`kitchen_ontology`, :func:`kitchen_example` — the paper's kitchen example (its ontology; the cells are
+  illustrative).
 
 Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian networks),
 ``psgsl_pgm.sim`` (simulated house), ``psgsl_pgm.olfaction`` (olfactory estimators p(s | g)),
@@ -25,8 +26,8 @@ from ._fov import field_of_view, view_information_gain
 from ._fusion import fuse
 from ._grid import GridMap
 from ._infogain import semantic_information_gain
-from ._kitchen import kitchen_example
-from ._ontology import Ontology, kitchen_ontology
+from ._kitchen import kitchen_example, kitchen_ontology
+from ._ontology import Ontology
 from ._semantic import semantic_source_probability
 
 __version__ = "0.1.0"

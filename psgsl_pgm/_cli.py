@@ -21,7 +21,9 @@ def _kitchen(args) -> int:
     from ._kitchen import kitchen_example
 
     res = kitchen_example()
-    print("The paper's kitchen example: smoke; p(o | s) = oven 0.4, microwave 0.25, refrigerator 0.3, countertop 0.05")
+    ont = res["ontology"]
+    row = ", ".join(f"{c} {p:g}" for c, p in zip(ont.classes, ont.source_likelihood("smoke")) if p > 0)
+    print(f"The paper's kitchen ontology (smoke; p(o | s) = {row}) on six illustrative cells")
     print(f"{'cell':>14} {'p(s|z)':>8} {'p(s|g)':>8} {'p(s|g,z)':>9}")
     for name, s, g, f in zip(res["cells"], res["semantic"], res["olfactory"], res["fused"]):
         print(f"{name:>14} {s:8.4f} {g:8.4f} {f:9.4f}")
@@ -175,7 +177,8 @@ def build_parser() -> argparse.ArgumentParser:
     est.add_argument("--out", required=True, help=".npy to write p(s | g, z) to")
     est.set_defaults(func=_estimate)
 
-    sub.add_parser("kitchen", help="the paper's kitchen example on six cells").set_defaults(func=_kitchen)
+    kitchen = sub.add_parser("kitchen", help="the paper's kitchen ontology on six illustrative cells")
+    kitchen.set_defaults(func=_kitchen)
     _cli_world.add_parser(sub)
     return parser
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
 
@@ -11,7 +10,7 @@ import yaml
 
 from ._validate import SUM_RTOL, as_float_array, check_distribution, describe
 
-__all__ = ["Ontology", "kitchen_ontology", "OTHER"]
+__all__ = ["Ontology", "OTHER"]
 
 #: The catch-all class for every object (or empty floor) that the ontology does not list.
 OTHER = "other"
@@ -310,17 +309,6 @@ def _read_yaml(path: Path, what: str):
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise ValueError(f"malformed YAML in {what} file {path}: {' '.join(str(exc).split())}") from None
-
-
-def kitchen_ontology() -> Ontology:
-    """The paper's kitchen/smoke example (Sec. "Semantic Knowledge and Ontology"), shipped with the package.
-
-    >>> from psgsl_pgm import kitchen_ontology
-    >>> kitchen_ontology().source_likelihood("smoke")
-    array([0.4 , 0.25, 0.3 , 0.05, 0.  ])
-    """
-    with resources.as_file(resources.files("psgsl_pgm") / "data" / "kitchen_smoke.yaml") as path:
-        return Ontology.from_yaml(path)
 
 
 # ------------------------------------------------------------------------------------------------ helpers

@@ -1,21 +1,18 @@
-"""The canonical example problems exported to ``networks/`` (the paper's kitchen, a 3×3 grid, gas types)."""
+"""The canonical example problems exported to ``networks/`` (the paper's kitchen, a 3×3 grid, gas types).
+
+The kitchen's ontology and its illustrative cells, detector and olfaction come from the one kitchen module,
+:mod:`psgsl_pgm._kitchen`.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .._kitchen import ETHANOL, FOUR_CELL_OLFACTION, FOUR_CELLS, kitchen_ontology
+from .._kitchen import detector_likelihood as _detector
 from ._problem import SemanticGSLProblem
 
 __all__ = ["gas_type_problem", "grid_problem", "kitchen_problem"]
-
-#: The paper's smoke ontology p(o_ci | s_c) (Sec. "Semantic Knowledge and Ontology"), plus "other" = 0.
-KITCHEN_CLASSES = ("oven", "microwave", "refrigerator", "countertop", "other")
-KITCHEN_SMOKE = (0.4, 0.25, 0.3, 0.05, 0.0)
-
-
-def _detector(classes, seen: str, hit: float = 0.7, miss: float = 0.1) -> np.ndarray:
-    """p(z = "detected ``seen``" | o): ``hit`` for the detected class, ``miss`` for every other."""
-    return np.where(np.array(classes) == seen, hit, miss)
 
 
 def kitchen_problem() -> SemanticGSLProblem:
@@ -27,18 +24,15 @@ def kitchen_problem() -> SemanticGSLProblem:
     p(g | c) = (0.5, 1, 0.5, 1). Worked by hand (see ``tests/test_networks_kitchen.py``): p(s | z) =
     (0.34, 0.25, 0.28, 0.13) and p(s | g, z) = (17, 25, 14, 13) / 69.
     """
-    from psgsl_pgm import kitchen_ontology
-
     ontology = kitchen_ontology()
     classes = tuple(ontology.classes)
-    objects = ("oven", "microwave", "refrigerator", "countertop")
     return SemanticGSLProblem(
         ontology.source_likelihood("smoke"),
         np.full(len(classes), 1.0 / len(classes)),
         cells=("r0c0", "r0c1", "r1c0", "r1c1"),
         observation_cells=np.arange(4),
-        observation_likelihoods=np.array([_detector(classes, o) for o in objects]),
-        olfactory_likelihood=[0.5, 1.0, 0.5, 1.0],
+        observation_likelihoods=np.array([_detector(classes, o) for o in FOUR_CELLS]),
+        olfactory_likelihood=FOUR_CELL_OLFACTION,
         class_names=classes,
         gas_names=("smoke",),
         shape=(2, 2),
@@ -53,7 +47,8 @@ def grid_problem() -> SemanticGSLProblem:
     p(z | o) = (1, 1, 1, 0.5, 0.5); r1c0, r1c2, r2c0, r2c1 are unobserved. Olfaction p(g | c) = exp(−d²/2),
     d the distance in cells to r0c1; uniform source prior; β uniform.
     """
-    classes = KITCHEN_CLASSES
+    ontology = kitchen_ontology()
+    classes = tuple(ontology.classes)
     cells = tuple(f"r{r}c{c}" for r in range(3) for c in range(3))
     seen = [(0, "oven"), (2, "microwave"), (4, "countertop"), (4, "countertop"), (8, "countertop")]
     wall = np.array([1.0, 1.0, 1.0, 0.5, 0.5])
@@ -62,7 +57,8 @@ def grid_problem() -> SemanticGSLProblem:
     rows, cols = np.divmod(np.arange(9), 3)
     plume = np.exp(-((rows - 0) ** 2 + (cols - 1) ** 2) / 2.0)  # p(g | c), source-like peak at r0c1
     return SemanticGSLProblem(
-        KITCHEN_SMOKE, np.full(5, 0.2), cells=cells, observation_cells=obs_cells,
+        ontology.source_likelihood("smoke"), np.full(len(classes), 1.0 / len(classes)), cells=cells,
+        observation_cells=obs_cells,
         observation_likelihoods=np.array(obs), olfactory_likelihood=plume, class_names=classes,
         gas_names=("smoke",), shape=(3, 3),
     )
@@ -77,7 +73,7 @@ def gas_type_problem() -> SemanticGSLProblem:
     """
     base = kitchen_problem()
     return SemanticGSLProblem(
-        np.array([KITCHEN_SMOKE, (0.05, 0.05, 0.3, 0.5, 0.1)]), base.background, cells=base.cell_names,
+        np.array([base.source_likelihood[0], ETHANOL]), base.background, cells=base.cell_names,
         observation_cells=base.observation_cells, observation_likelihoods=base.observation_likelihoods,
         olfactory_likelihood=base.olfactory_likelihood, gas_prior=[0.5, 0.5], gas_observations=[[0.3, 0.6]],
         class_names=base.class_names, gas_names=("smoke", "ethanol"), shape=base.shape,
