@@ -1,6 +1,7 @@
 """Command line: ``psgsl`` (or ``python -m psgsl_pgm``).
 
-``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``, ``world check``. Usage errors and
+``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``, ``world check``,
+``export-networks`` (each further subcommand registered from its own ``_cli_<name>`` module). Usage errors and
 bad input files give a one-line message and exit code 2, never a traceback.
 """
 
@@ -9,6 +10,8 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+
+from . import _cli_export
 
 __all__ = ["build_parser", "main"]
 
@@ -180,6 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
     kitchen = sub.add_parser("kitchen", help="the paper's kitchen ontology on six illustrative cells")
     kitchen.set_defaults(func=_kitchen)
     _cli_world.add_parser(sub)
+    _cli_export.add_parser(sub)
     return parser
 
 

@@ -25,10 +25,10 @@ READERS = {"xmlbif": XMLBIFReader, "bif": BIFReader}
 @pytest.mark.parametrize("name", sorted(CANONICAL))
 def test_committed_file_equals_fresh_export(name, fmt):
     path = NETWORKS_DIR / f"{name}.{fmt}"
-    assert path.is_file(), f"{path} is missing: run `python -m networks.export_networks`"
+    assert path.is_file(), f"{path} is missing: run `psgsl export-networks networks`"
     _, model = canonical_network(name)
     assert path.read_text(encoding="utf-8") == network_text(model, fmt), (
-        f"{path.name} is stale: regenerate with `python -m networks.export_networks`"
+        f"{path.name} is stale: regenerate with `psgsl export-networks networks`"
     )
 
 
@@ -57,16 +57,3 @@ def test_committed_file_loads_back_with_same_posteriors(name, fmt):
 def test_drawings_exist():
     for name in CANONICAL:
         assert (NETWORKS_DIR / f"{name}.png").stat().st_size > 1000
-
-
-def test_export_script_writes_the_same_files(tmp_path):
-    """The script regenerates exactly the committed text files (drawings skipped here)."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("export_networks", NETWORKS_DIR / "export_networks.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    written = module.export(tmp_path, drawings=False)
-    assert sorted(p.name for p in written) == sorted(f"{n}.{f}" for n in CANONICAL for f in READERS)
-    for path in written:
-        assert path.read_text(encoding="utf-8") == (NETWORKS_DIR / path.name).read_text(encoding="utf-8")

@@ -5,12 +5,17 @@
 * :func:`build_network_a` — Network A, one discrete source variable S over the cells;
 * :func:`build_network_b` — Network B, binary S_i with the exactly-one constraint α ("chain" or "table");
 * :func:`exact_source_posterior`, :func:`exact_gas_posterior`, :func:`exact_information_gain` — exact
-  queries with pgmpy's VariableElimination.
+  queries with pgmpy's VariableElimination;
+* :func:`export` — the canonical networks (:data:`CANONICAL`, :func:`canonical_network`) as XMLBIF, BIF and
+  PNG files (``psgsl export-networks DIR``; the files under ``networks/``), drawn by :func:`draw_network`.
 
 pgmpy is imported only here (``import psgsl_pgm`` stays light).
 """
 
+from . import _quiet_import  # noqa: F401  (first: pgmpy imported without its import-time warnings)
 from ._cpds import check_normalised
+from ._draw import draw_network
+from ._export import CANONICAL, canonical_network, export
 from ._inference import (
     exact_gas_posterior,
     exact_information_gain,
@@ -24,15 +29,19 @@ from ._problem import SemanticGSLProblem
 from ._underflow import MIN_EVIDENCE, log_evidence
 
 __all__ = [
+    "CANONICAL",
     "MAX_TABLE_CELLS",
     "MIN_EVIDENCE",
     "SemanticGSLProblem",
     "build_network_a",
     "build_network_b",
+    "canonical_network",
     "check_normalised",
+    "draw_network",
     "exact_gas_posterior",
     "exact_information_gain",
     "exact_source_posterior",
+    "export",
     "log_evidence",
     "network_evidence",
     "network_kind",

@@ -4,25 +4,28 @@ Private to the notebooks (not part of the estimator's API); every function here 
 ``tests/teaching``. (The ontology of the simulated house is the experiment's,
 :func:`psgsl_pgm.experiment.house_ontology`.)
 
-* :func:`draw_network` — a layered drawing of Network A or B (networkx + matplotlib);
+* :func:`draw_network` — the layered drawing of Network A or B (networkx + matplotlib), from
+  :mod:`psgsl_pgm.networks` (the drawer of the exported PNGs too);
 * :func:`plot_cell_map`, :func:`map_norm` — the package's one map plotter (:mod:`psgsl_pgm.sim`), re-exported:
-  a value per cell with its colour bar, and one colour scale across compared panels;
+  a value per cell with its colour bar, and one colour scale across compared panels; :func:`figure_problems`,
+  what a figure lacks for a reader (axis labels, colour bars) — every notebook figure is checked with it;
 * :func:`approximation_error` — mean total-variation error of the paper's approximation
   p(o_ni | s_c) ≈ p(o_ni) against the exact posterior, versus the number of cells;
 * :func:`survey` — class beliefs after camera frames from a list of poses;
 * :func:`candidate_poses` — a lattice of camera poses on the free floor, for φ_O(p).
 """
 
-from psgsl_pgm.sim import map_norm, plot_cell_map
+from psgsl_pgm.networks import draw_network
+from psgsl_pgm.sim import figure_problems, map_norm, plot_cell_map
 
 from ._approximation import approximation_error
-from ._graph import draw_network
 from ._views import candidate_poses, survey
 
 __all__ = [
     "approximation_error",
     "candidate_poses",
     "draw_network",
+    "figure_problems",
     "map_norm",
     "plot_cell_map",
     "survey",

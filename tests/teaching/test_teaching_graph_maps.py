@@ -8,7 +8,7 @@ import pytest
 from psgsl_pgm.networks import SemanticGSLProblem, build_network_a, build_network_b
 from psgsl_pgm.sim import default_house
 from psgsl_pgm.teaching import draw_network, plot_cell_map
-from psgsl_pgm.teaching._graph import network_layout
+from psgsl_pgm.networks._draw import network_layout
 
 
 def _problem(m=1):
