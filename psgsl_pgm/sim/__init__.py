@@ -28,7 +28,7 @@ from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._house import House, default_house, segment_mask
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
-from ._plot import map_norm, plot_cell_map, plot_house
+from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
 from ._rosmap import load_ros_map, save_ros_map
 from ._roommap import load_room_map, save_room_map
 from ._semantic_map import SemanticMap
@@ -64,6 +64,7 @@ __all__ = [
     "cells_clear",
     "default_house",
     "default_world",
+    "figure_problems",
     "load_objects",
     "load_world",
     "load_ros_map",

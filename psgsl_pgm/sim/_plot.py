@@ -16,7 +16,7 @@ import numpy as np
 
 from ._classes import OTHER
 
-__all__ = ["draw_walls", "map_norm", "object_label_positions", "plot_cell_map", "plot_house"]
+__all__ = ["draw_walls", "figure_problems", "map_norm", "object_label_positions", "plot_cell_map", "plot_house"]
 
 
 def _grid_of(house, grid):
@@ -284,3 +284,83 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
     ax.set_aspect("equal")
     _label_axes(ax, g)
     return ax
+
+
+#: Colour maps whose colours name categories (rooms, object classes), not values: they need text labels or a
+#: legend, not a colour bar.
+QUALITATIVE_CMAPS = frozenset({"Pastel1", "Pastel2", "Paired", "Accent", "Dark2", "Set1", "Set2", "Set3", "tab10",
+                               "tab20", "tab20b", "tab20c"})
+
+
+def _carries_values(mappable) -> bool:
+    """True when the colour of ``mappable`` (an image or a coloured collection) encodes a number."""
+    data = mappable.get_array()
+    if data is None:
+        return False
+    cmap = mappable.get_cmap()
+    if cmap.name in QUALITATIVE_CMAPS or cmap.N <= 1:
+        return False
+    values = np.ma.masked_invalid(np.ma.asarray(data, dtype=np.float64)).compressed()
+    return np.unique(values).size > 1  # a one-valued layer (walls, a field-of-view mask) is a mask
+
+
+def figure_problems(fig) -> list:
+    """What a reader would miss in ``fig``: unlabelled axes, value colours without a colour bar.
+
+    The rules the package's figures (and its notebooks' figures) are held to:
+
+    * every visible Axes has an x and a y label (its own, one of an Axes it shares that axis with, or the
+      figure's ``supxlabel``/``supylabel``); Axes drawn with the axis off (network drawings) are exempt;
+    * every image or coloured collection whose colour carries a value (not a one-valued mask, not a
+      qualitative colour map of categories) has a colour bar — its own, or that of a mappable with the same
+      norm (one scale shared by compared panels); no such image on an Axes with the axis off;
+    * every colour bar has a label.
+
+    Parameters
+    ----------
+    fig : matplotlib Figure
+
+    Returns
+    -------
+    list of str
+        One line per problem; empty when the figure is readable.
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> from psgsl_pgm.sim import figure_problems
+    >>> fig, ax = plt.subplots()
+    >>> _ = ax.imshow([[0.0, 1.0]])
+    >>> figure_problems(fig)                                       # doctest: +NORMALIZE_WHITESPACE
+    ['axes 0 (untitled): no x label', 'axes 0 (untitled): no y label',
+     'axes 0 (untitled): image 0 carries values but has no colour bar']
+    >>> plt.close(fig)
+    """
+    problems = []
+    mappables = [m for ax in fig.axes for m in (*ax.images, *ax.collections)]
+    with_bar = [m for m in mappables if getattr(m, "colorbar", None) is not None]
+    bar_axes = {m.colorbar.ax for m in with_bar}
+    shared_norms = {id(m.norm) for m in with_bar}
+    for cb_ax in bar_axes:
+        if not (cb_ax.get_ylabel() or cb_ax.get_xlabel()):
+            problems.append(f"colour bar of {cb_ax.get_label() or 'an image'}: no label")
+    sup_x = bool(fig.get_supxlabel()) if hasattr(fig, "get_supxlabel") else False
+    sup_y = bool(fig.get_supylabel()) if hasattr(fig, "get_supylabel") else False
+    for a, ax in enumerate(x for x in fig.axes if x not in bar_axes):
+        name = f"axes {a} ({ax.get_title() or 'untitled'})"
+        if ax.axison:
+            xs = [ax, *ax.get_shared_x_axes().get_siblings(ax)]
+            ys = [ax, *ax.get_shared_y_axes().get_siblings(ax)]
+            if not (sup_x or any(s.get_xlabel() for s in xs)):
+                problems.append(f"{name}: no x label")
+            if not (sup_y or any(s.get_ylabel() for s in ys)):
+                problems.append(f"{name}: no y label")
+        for kind, items in (("image", ax.images), ("collection", ax.collections)):
+            for i, m in enumerate(items):
+                if not _carries_values(m):
+                    continue
+                if not ax.axison:
+                    problems.append(f"{name}: {kind} {i} carries values on an axes drawn without axes")
+                elif getattr(m, "colorbar", None) is None and id(m.norm) not in shared_norms:
+                    problems.append(f"{name}: {kind} {i} carries values but has no colour bar")
+    return problems
