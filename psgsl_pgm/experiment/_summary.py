@@ -36,6 +36,10 @@ def aligned(runs, name: str, grid) -> np.ndarray:
 def summarize(runs) -> dict:
     """Mean and 95 % CI (Student t over runs) of the early and final error and spread, per variant.
 
+    Errors and spreads are distances (≥ 0): their intervals are the t-intervals intersected with [0, ∞)
+    (``mean_ci(..., lower=0)``, which keeps the coverage). Paired differences can be negative and keep the
+    plain t-interval.
+
     Returns
     -------
     dict
@@ -55,11 +59,11 @@ def summarize(runs) -> dict:
     out = {"n_runs": len(runs), "seeds": sorted({r.seed for r in runs}), "early_progress": EARLY}
     for v, name in enumerate(VARIANTS):
         out[name] = {
-            "early_error": mean_ci(err[:, 0, v]),
-            "final_error": mean_ci(err[:, 1, v]),
-            "mean_error": mean_ci(area[:, v]),
-            "early_spread": mean_ci(spr[:, 0, v]),
-            "final_spread": mean_ci(spr[:, 1, v]),
+            "early_error": mean_ci(err[:, 0, v], lower=0.0),  # distances: intervals cut at 0
+            "final_error": mean_ci(err[:, 1, v], lower=0.0),
+            "mean_error": mean_ci(area[:, v], lower=0.0),
+            "early_spread": mean_ci(spr[:, 0, v], lower=0.0),
+            "final_spread": mean_ci(spr[:, 1, v], lower=0.0),
         }
     pairs = (("olfaction", "semantics"), ("olfaction", "semantics+rooms"), ("semantics", "semantics+rooms"))
     out["paired"] = {
@@ -119,7 +123,8 @@ def format_table(summary: dict, *, title: str = "") -> str:
     head = (f"{'variant':<16} {'error at 1/4':>21} {'final error':>21} {'mean error':>21} "
             f"{'final spread':>21}")
     lines = [title] if title else []
-    lines += [f"{summary['n_runs']} runs (seeds {summary['seeds']}); metres, mean [95 % CI]", head, "-" * len(head)]
+    lines += [f"{summary['n_runs']} runs (seeds {summary['seeds']}); metres, mean [95 % CI: Student t, cut at 0]",
+              head, "-" * len(head)]
     for name in VARIANTS:
         s = summary[name]
         lines.append(f"{name:<16} {_fmt(s['early_error']):>21} {_fmt(s['final_error']):>21} "
