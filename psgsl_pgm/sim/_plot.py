@@ -95,7 +95,7 @@ def _label_axes(ax, grid):
 
 
 def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="viridis", log=False, norm=None,
-                  colorbar=True, label="value per cell", walls=True):
+                  colorbar=True, label="value per cell", walls=True, objects=False):
     """Draw one number per cell (a probability map, an information-gain map) as an image.
 
     Parameters
@@ -120,6 +120,8 @@ def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="v
         Colour-bar label (say what the value is, with units).
     walls : bool, keyword-only
         Draw the walls of ``house``/``grid`` on top.
+    objects : bool, keyword-only
+        Write each object's class name on its visible part (needs ``house``; :func:`object_label_positions`).
 
     Returns
     -------
@@ -129,7 +131,7 @@ def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="v
     Raises
     ------
     ValueError
-        ``values`` not 2-D, or not of the grid's shape.
+        ``values`` not 2-D, or not of the grid's shape; ``objects`` without ``house``.
 
     Examples
     --------
@@ -148,6 +150,8 @@ def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="v
         raise ValueError(f"values must be an (H, W) map, got shape {v.shape}")
     if g is not None and v.shape != tuple(g.shape):
         raise ValueError(f"values must have the house's shape {tuple(g.shape)}, got {v.shape}")
+    if objects and house is None:
+        raise ValueError("objects=True needs house= (the objects to label)")
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
     log = isinstance(norm, LogNorm) if norm is not None else log
@@ -158,6 +162,8 @@ def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="v
     image = ax.imshow(shown, origin="lower", extent=extent, cmap=cmap, norm=norm, interpolation="nearest")
     if g is not None and walls:
         draw_walls(ax, g)
+    if objects:
+        _label_objects(ax, house, colour="white")
     _label_axes(ax, g)
     if colorbar:
         ax.figure.colorbar(image, ax=ax, shrink=0.8, label=label)
@@ -184,6 +190,12 @@ def object_label_positions(house) -> np.ndarray:
         visible = owner == i
         out[i] = _deepest(visible, centres, o.center) if visible.any() else o.center
     return out
+
+
+def _label_objects(ax, house, *, colour="black", fontsize=6):
+    """Write every object's class name at its :func:`object_label_positions` point (clipped to the axes)."""
+    for o, (x, y) in zip(house.objects, object_label_positions(house)):
+        ax.text(x, y, o.class_name, ha="center", va="center", fontsize=fontsize, color=colour, clip_on=True)
 
 
 def _deepest(mask, centres, target):
@@ -274,8 +286,7 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
             if np.isfinite(x):
                 ax.text(x, y, name, ha="center", va="center", fontsize=9, alpha=0.6, clip_on=True)
         if objects and house.objects:
-            for o, (x, y) in zip(house.objects, object_label_positions(house)):
-                ax.text(x, y, o.class_name, ha="center", va="center", fontsize=6, clip_on=True)
+            _label_objects(ax, house)
     if source is not None:
         sx, sy = np.asarray(source, dtype=float)[:2]
         ax.plot(sx, sy, marker="*", color="red", markersize=14, markeredgecolor="k")
