@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from pathlib import Path
 
 from . import _cli_export
 
@@ -57,13 +58,31 @@ def _experiment(args) -> int:
     from .experiment import ExperimentConfig, format_table, parse_source, run_experiment
 
     try:
-        sources = [parse_source(s) for s in args.sources]
-    except ValueError as exc:
+        spec = None
+        if args.world is not None:
+            from .sim import load_world
+
+            spec = load_world(args.world)
+        names = args.sources
+        if names is None:
+            names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
+            if not names:
+                raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+        sources = [parse_source(s) for s in names]
+        gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
+        config = ExperimentConfig(stops=args.stops, **gas)
+        if spec is not None:
+            for s in sources:  # every source must exist in this world before any run starts
+                spec.resolve_source(s, spec.house(0))
+    except (ValueError, TypeError, FileNotFoundError) as exc:
         raise _UsageError(str(exc)) from None
+    where = "the embedded house" if spec is None else args.world
+    print(f"psgsl experiment: {where}, sources {', '.join(map(str, names))}, {args.seeds} seeds, gas "
+          f"{config.gas!r} -> {args.out}", flush=True)
     try:
         summaries = run_experiment(sources, range(args.seeds), args.estimators, out=args.out, workers=args.workers,
-                                   progress=not args.quiet, config=ExperimentConfig(stops=args.stops),
-                                   scheduler=args.scheduler)
+                                   progress=not args.quiet, config=config, scheduler=args.scheduler,
+                                   world=args.world)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=os.path.join(args.out, "runs"))
     except (ValueError, TypeError) as exc:  # e.g. stored runs of another configuration, an unreachable scheduler
@@ -73,6 +92,9 @@ def _experiment(args) -> int:
         print()
     print(f"written to {args.out}: summary.json, metrics.csv, one folder per source and estimator, runs/")
     return 0
+
+
+_DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def _load_array(path, name):
@@ -105,7 +127,10 @@ def _estimate_checked(args) -> int:
         ontology = Ontology.from_yaml(args.ontology)
     except FileNotFoundError:
         raise _UsageError(f"--ontology: no such file {args.ontology!r}") from None
-    class_probs = _load_array(args.class_probs, "--class-probs")
+    if Path(args.class_probs).suffix.lower() in (".npz", ".json"):
+        class_probs = _read_beliefs(args, ontology)
+    else:
+        class_probs = _load_array(args.class_probs, "--class-probs")
     olfactory = _load_array(args.olfactory, "--olfactory")
     if args.gas is None:
         if len(ontology.gases) != 1:
@@ -116,9 +141,12 @@ def _estimate_checked(args) -> int:
     if class_probs.shape[-1:] != (len(ontology.classes),):
         raise _UsageError(f"--class-probs must have shape (..., {len(ontology.classes)}) for the ontology's classes "
                           f"{list(ontology.classes)}, got {class_probs.shape}")
-    if olfactory.shape != class_probs.shape[:-1]:
-        raise _UsageError(f"--olfactory must have the map's shape {class_probs.shape[:-1]}, got {olfactory.shape}")
-    semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior)
+    voxels = class_probs.ndim == 4 and olfactory.shape == class_probs.shape[:2]  # (H, W, L, k) voxels, (H, W) cells
+    cells = class_probs.shape[:2] if voxels else class_probs.shape[:-1]
+    if olfactory.shape != cells:
+        raise _UsageError(f"--olfactory must have the map's shape {cells}, got {olfactory.shape}")
+    semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
+                                           column_axis=2 if voxels else None)  # voxel columns -> cells
     posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
     out = os.fspath(args.out)
     try:
@@ -129,6 +157,23 @@ def _estimate_checked(args) -> int:
     print(f"p(s | g, z) for {gas!r} over {posterior.size} cells -> {out}; most probable cell {tuple(map(int, best))} "
           f"(p = {posterior[best]:.4g})")
     return 0
+
+
+def _read_beliefs(args, ontology):
+    """Class beliefs from an .npz (probs + classes) or a Voxeland instance map (.json, needs --map)."""
+    from ._class_maps import read_class_beliefs
+
+    grid = None
+    if args.map is not None:
+        from .sim import load_ros_map
+        from .sim._resample import coarsen_factor, coarsen_occupancy
+
+        fine = load_ros_map(args.map)
+        res = fine.resolution if args.resolution is None else args.resolution
+        grid = coarsen_occupancy(fine, coarsen_factor(fine.resolution, res, where="--resolution"))
+    elif Path(args.class_probs).suffix.lower() == ".json":
+        raise _UsageError("--class-probs: a Voxeland instance map (.json) needs --map (the ROS map it is read onto)")
+    return read_class_beliefs(args.class_probs, ontology.classes, grid=grid, class_prior=ontology.class_prior)
 
 
 def _positive_int(text):
@@ -159,8 +204,11 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(func=_demo)
 
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
-    exp.add_argument("--sources", nargs="+", default=["oven", "bed", "5.0,6.0"],
-                     help="object class names or 'x,y' positions (default: %(default)s)")
+    exp.add_argument("--world", default=None, help="world file: your own house (see README 'Your own house'); "
+                     "default: the embedded house")
+    exp.add_argument("--sources", nargs="+", default=None,
+                     help="object class names, 'x,y' positions or the world file's source names (default: the "
+                     "world's sources; for the embedded house oven bed 5.0,6.0)")
     exp.add_argument("--seeds", type=_positive_int, default=10, help="seeds 0..N-1 (default: %(default)s)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
@@ -174,7 +222,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     est = sub.add_parser("estimate", help="fuse your own class beliefs and olfactory map: p(s | g, z)")
     est.add_argument("--ontology", required=True, help="ontology YAML (see Ontology.from_yaml)")
-    est.add_argument("--class-probs", required=True, help=".npy (..., k): p(o_c | z_c) per cell")
+    est.add_argument("--class-probs", required=True,
+                     help=".npy (..., k) in the ontology's class order, .npz (probs + classes by name), or Voxeland's "
+                     "instance map .json (with --map): p(o_c | z_c) per cell")
+    est.add_argument("--map", default=None, help="ROS map YAML whose grid a Voxeland .json is read onto")
+    est.add_argument("--resolution", type=float, default=None, help="working cell size for --map, m "
+                     "(default: the map's)")
     est.add_argument("--olfactory", required=True, help=".npy (...): p(s | g) per cell")
     est.add_argument("--gas", default=None, help="gas name (default: the ontology's only gas)")
     est.add_argument("--out", required=True, help=".npy to write p(s | g, z) to")

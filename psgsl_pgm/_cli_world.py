@@ -117,7 +117,7 @@ def plot_world(spec, *, seed: int = 0):
     h, w = house.shape
     fig, ax = plt.subplots(figsize=(7.5, 7.5 * h / w + 0.8), layout="constrained")
     plot_house(house, ax=ax, wind=wind, wind_stride=max(2, min(h, w) // 25))
-    for win in spec.windows:
+    for win in spec.windows_of(house):
         (a, b), (c, d) = win["from"], win["to"]
         ax.plot([a, c], [b, d], color="tab:blue" if win["role"] == "inlet" else "tab:red", lw=3,
                 label=win["role"])

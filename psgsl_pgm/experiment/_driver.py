@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from functools import lru_cache
 from pathlib import Path
 
 from .._grid_runner import GridJob, run_grid
@@ -19,35 +20,49 @@ DEMO_SEEDS = tuple(range(4))
 SNAPSHOTS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
 
-def _stored_config_check(config: ExperimentConfig):
+@lru_cache(maxsize=4)
+def _world(path):
+    """The world of a world file, loaded once per process (None: the embedded house)."""
+    from ..sim import default_world, load_world
+
+    return default_world() if path is None else load_world(path)
+
+
+def search_in_world(source, seed, estimator, *, world=None, **kwargs):
+    """:func:`run_search` in the world of the world file ``world`` (a path, picklable for worker processes)."""
+    from . import _run
+
+    return _run.run_search(source, seed, estimator, world_spec=_world(world), **kwargs)
+
+
+def _stored_config_check(expected: dict):
     def check(job: GridJob) -> None:
         stored = load_run(job.path).config
-        if stored != config.to_dict():
+        if stored != expected:
             raise ValueError(f"{job.path} was computed with another configuration ({stored}); use a new output "
                              "directory or delete the stored runs")
     return check
 
 
-def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig) -> list:
+def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig, world=None) -> list:
     """The grid's jobs (:class:`psgsl_pgm._grid_runner.GridJob`): one :func:`run_search` per (source, estimator,
-    seed), its result to :func:`run_path`; the smallest seed keeps the progression figure's snapshots."""
-    from . import _run
-
+    seed) in the world file ``world`` (None: the embedded house), its result to :func:`run_path`; the smallest
+    seed keeps the progression figure's snapshots."""
     first = min(seeds)
-    return [GridJob(run_path(out, source, estimator, seed), _run.run_search, (source, seed, estimator),
-                    {"config": config, "snapshot_at": SNAPSHOTS if seed == first else ()})
+    return [GridJob(run_path(out, source, estimator, seed), search_in_world, (source, seed, estimator),
+                    {"config": config, "snapshot_at": SNAPSHOTS if seed == first else (), "world": world})
             for source, estimator, seed in itertools.product(sources, estimators, seeds)]
 
 
 def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",), *, out, workers: int = 2,
                    config: ExperimentConfig | None = None, progress: bool = True, flat: bool = False,
-                   scheduler: str | None = None) -> dict:
+                   scheduler: str | None = None, world=None) -> dict:
     """Run every (source, seed, estimator) not yet on disk, then aggregate everything in ``out``.
 
     Parameters
     ----------
     sources : sequence of str
-        Source specifications (:func:`parse_source`).
+        Source specifications (:func:`parse_source`; with a world file also its source names).
     seeds : iterable of int
     estimators : sequence of {"infotaxis", "pmfs"}
     out : path, keyword-only
@@ -64,6 +79,9 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
         Where the runs go (:func:`psgsl_pgm._grid_runner.run_grid`): the local pool (None), a dask LocalCluster
         of ``workers`` processes ("local"), or a running dask scheduler (``"tcp://HOST:PORT"``). Every backend
         gives bit-identical runs.
+    world : str or Path, optional, keyword-only
+        A world file (:func:`psgsl_pgm.load_world`); default: the embedded house. Loaded and checked here, before
+        any run, and once more in every worker process.
 
     Returns
     -------
@@ -86,23 +104,27 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
         raise ValueError("need at least one source, one seed and one estimator")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    world = None if world is None else str(Path(world).resolve())
+    from ._run import run_config
+
+    expected = run_config(config, _world(world))  # a bad world file fails here, before any output is written
     out = Path(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    jobs = experiment_jobs(sources, seeds, estimators, out=out, config=config)
-    run_grid(jobs, write=write_run, check_done=_stored_config_check(config), scheduler=scheduler, workers=workers,
+    jobs = experiment_jobs(sources, seeds, estimators, out=out, config=config, world=world)
+    run_grid(jobs, write=write_run, check_done=_stored_config_check(expected), scheduler=scheduler, workers=workers,
              progress=progress, desc="search runs")
-    return write_outputs(out, sources, seeds, estimators, flat=flat)
+    return write_outputs(out, sources, seeds, estimators, flat=flat, world=world)
 
 
-def write_outputs(out, sources, seeds, estimators, *, flat: bool = False) -> dict:
+def write_outputs(out, sources, seeds, estimators, *, flat: bool = False, world=None) -> dict:
     """Aggregate the stored runs of the grid into summaries, CSV and figures.
 
     With ``flat=True`` (the demo: one source, one estimator) everything goes straight into ``out``; otherwise
     into ``out/<source>-<estimator>/``, plus ``out/summary.json`` and ``out/metrics.csv`` over all groups.
+    ``world`` is the runs' world file (default: the embedded house), whose house the figures draw.
     """
     import matplotlib.pyplot as plt
 
-    from ..sim import default_house
     from ._figures import plot_error_chart, plot_progression, plot_room_types
     from ._tour import exploration_tour
 
@@ -123,8 +145,9 @@ def write_outputs(out, sources, seeds, estimators, *, flat: bool = False) -> dic
         plt.close(fig)
         shown = min(runs, key=lambda r: r.seed)
         if shown.snapshots:
-            house = default_house(shown.seed)
-            fig = plot_progression(shown, house, exploration_tour(house))
+            spec = _world(None if world is None else str(Path(world).resolve()))
+            house = spec.house(shown.seed)
+            fig = plot_progression(shown, house, exploration_tour(house, start=spec.start_for(house)))
             fig.savefig(group / "progression.png", dpi=110)
             plt.close(fig)
             start = shown.snapshots[min(shown.snapshots)]

@@ -22,10 +22,9 @@ from .._fusion import fuse
 from .._semantic import semantic_source_probability
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._metrics import error_and_spread
-from ._ontology import house_ontology
 from ._tour import Tour, exploration_tour
 
-__all__ = ["RunResult", "run_search", "semantic_terms", "walk"]
+__all__ = ["RunResult", "run_config", "run_search", "semantic_terms", "walk"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,8 +68,13 @@ class RunResult:
 
 
 def semantic_terms(maps, likelihood, class_prior):
-    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W)."""
-    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior) for m in maps])
+    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W).
+
+    Voxel maps (H, W, L, k) are reduced to columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene
+    Representations").
+    """
+    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior,
+                                                 column_axis=2 if m.probs.ndim == 4 else None) for m in maps])
 
 
 def walk(world, tour: Tour, config: ExperimentConfig, *, camera: bool = True):
@@ -92,24 +96,25 @@ def walk(world, tour: Tour, config: ExperimentConfig, *, camera: bool = True):
         yield j, stop, reading, wind, frames
 
 
-def _make_estimator(name, model, config):
+def _make_estimator(name, model, config, *, prior=None):
     from ..olfaction import GridInfotaxis, PMFSEstimator
 
     if name == "infotaxis":
-        return GridInfotaxis.from_model(model, tempering=config.tempering, false_hit_rate=config.false_hit_rate)
+        return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
+                                        false_hit_rate=config.false_hit_rate)
     if name == "pmfs":
-        return PMFSEstimator.from_model(model)
+        return PMFSEstimator.from_model(model, prior=prior)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 
 def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
-               snapshot_at=(), world=None, tour: Tour | None = None) -> RunResult:
-    """Run one search in the simulated house and measure every variant at every step.
+               snapshot_at=(), world=None, tour: Tour | None = None, world_spec=None) -> RunResult:
+    """Run one search in a house (the embedded one, or a world file's) and measure every variant at every step.
 
     Parameters
     ----------
     source : str or (2,) array_like
-        See :func:`parse_source`: a class name (``"oven"``) or a position.
+        See :func:`parse_source`: a class name (``"oven"``), a position, or a source name of the world file.
     seed : int
         Seed of the world (house jitter, wind, gas, sensors, detector).
     estimator : {"infotaxis", "pmfs"}
@@ -119,16 +124,22 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         Fractions of the search (0 = before the first stop, 1 = the end) whose three posteriors are kept, at
         step round(f · n).
     world : psgsl_pgm.sim.World, optional, keyword-only
-        A prepared world (default: ``make_world(seed=seed, source=source, warm_up=config.warm_up)``).
+        A prepared world (default: ``world_spec.make_world(seed, source, warm_up=config.warm_up)``).
     tour : Tour, optional, keyword-only
-        Default: :func:`exploration_tour` of the world's house.
+        Default: :func:`exploration_tour` of the world's house from the world file's start.
+    world_spec : psgsl_pgm.sim.WorldSpec, optional, keyword-only
+        The house, ontology, wind, start, source region and optional mapper beliefs
+        (:func:`psgsl_pgm.load_world`); default: the embedded house, :func:`psgsl_pgm.sim.default_world`.
+        The source region is the estimators' prior p(s) (uniform on it, zero elsewhere); with a
+        ``semantic_map`` the class beliefs come from it instead of the simulated camera.
 
     Returns
     -------
     RunResult
     """
+    from .. import room_evidence, update_class_probs
     from ..olfaction import PlumeModel
-    from ..sim import make_world, match_names
+    from ..sim import SemanticMap, default_world, match_names, reindex
 
     config = ExperimentConfig() if config is None else config
     if not isinstance(config, ExperimentConfig):
@@ -138,13 +149,14 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise TypeError(f"seed must be an integer, got {seed!r}")
     spec = parse_source(source)
+    setting = default_world() if world_spec is None else world_spec
     if world is None:
-        world = make_world(seed=int(seed), source=spec, warm_up=config.warm_up)
+        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
     house = world.house
-    tour = exploration_tour(house) if tour is None else tour
+    tour = exploration_tour(house, start=setting.start_for(house)) if tour is None else tour
     if config.stops is not None and config.stops < len(tour):
         tour = tour.first(config.stops)
-    ontology = house_ontology()
+    ontology = setting.ontology
     if config.gas not in ontology.gases:
         raise ValueError(f"gas must be one of the ontology's gases {ontology.gases}, got {config.gas!r}")
     classes = world.detector.classes
@@ -154,13 +166,23 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     likelihood = ontology.source_likelihood(config.gas)[order]  # p(o | s, γ) in the detector's class order
     beta = ontology.class_prior[order]  # β = p(o | ¬s)
     room_table = ontology.room_table[:, order]
-    plain = world.semantic_map(beta)
-    rooms = world.semantic_map(beta, room_table=room_table / room_table.sum(axis=1, keepdims=True),
-                               room_names=ontology.rooms)
+    room_table = room_table / room_table.sum(axis=1, keepdims=True)
+    mapped = setting.class_beliefs is not None  # a mapper's beliefs replace the simulated camera
+    if mapped:
+        given = setting.class_beliefs[..., order]
+        labels = reindex(house.room_labels, house.room_names, ontology.rooms)
+        factor = room_evidence(labels, room_table, beta)  # p(o | room) / p(o); 1 outside listed rooms
+        if given.ndim == 4:
+            factor = factor[:, :, None, :]
+        plain = SemanticMap(given, classes)
+        rooms = SemanticMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
+    else:
+        plain = world.semantic_map(beta)
+        rooms = world.semantic_map(beta, room_table=room_table, room_names=ontology.rooms)
     model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
                                      diffusivity=config.diffusivity, lifetime=config.lifetime,
                                      encounter_scale=config.encounter_scale)
-    est = _make_estimator(estimator, model, config)
+    est = _make_estimator(estimator, model, config, prior=setting.region_mask(house).astype(np.float64))
     centres = house.grid.cell_centres()
     truth = world.source
 
@@ -188,7 +210,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
 
     pos[0] = tour.stops[0]
     record(0)
-    for j, stop, reading, wind, frames in walk(world, tour, config):
+    for j, stop, reading, wind, frames in walk(world, tour, config, camera=not mapped):
         est.update(stop, reading.hit, wind)
         for frame in frames:
             plain.update(frame)  # the same frames for both maps: one observation stream
@@ -196,4 +218,13 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         pos[j + 1], hits[j + 1] = stop, reading.hit
         record(j + 1)
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
-    return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps, config.to_dict())
+    return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps,
+                     run_config(config, setting))
+
+
+def run_config(config: ExperimentConfig, world_spec) -> dict:
+    """The settings a stored run is checked against: the config, plus the world file unless it is the embedded house."""
+    out = config.to_dict()
+    if world_spec is not None and world_spec.builtin is None:
+        out["world"] = str(world_spec.path)
+    return out

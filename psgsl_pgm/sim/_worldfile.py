@@ -168,6 +168,19 @@ class WorldSpec:
             kwargs.setdefault("perturbation", self.wind["perturbation"])
         return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
 
+    def windows_of(self, house: House) -> tuple:
+        """The windows: as declared, or (built-in house) each window mask's extent as a segment."""
+        if self.windows or self.fixed_house is not None:
+            return self.windows
+        out = []
+        for role, mask in (("inlet", house.inlet), ("outlet", house.outlet)):
+            if mask.any():
+                xy = house.grid.cell_centres()[mask]
+                lo, hi = xy.min(axis=0), xy.max(axis=0)
+                out.append({"role": role, "from": (float(lo[0]), float(lo[1])), "to": (float(hi[0]), float(hi[1])),
+                            "width": house.grid.resolution, "cells": int(mask.sum())})
+        return tuple(out)
+
     # --- summary -----------------------------------------------------------------------------------------
     def summary(self, seed: int = 0) -> dict:
         """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources."""
@@ -200,7 +213,7 @@ class WorldSpec:
             "objects": objects,
             "unlisted_classes": sorted(set(objects) - set(ont.classes)),
             "windows": [{"role": w["role"], "from": list(w["from"]), "to": list(w["to"]),
-                         "cells": int(w["cells"])} for w in self.windows],
+                         "cells": int(w["cells"])} for w in self.windows_of(house)],
             "wind": {k: v for k, v in self.wind.items() if k != "sequence"}
             | ({"snapshots": len(self.wind["sequence"].snapshots)} if self.wind["kind"] == "gaden" else {}),
             "start": [float(start[0]), float(start[1])],

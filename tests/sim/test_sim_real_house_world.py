@@ -88,3 +88,24 @@ def test_the_real_house_world_builds_a_simulation(tmp_path):
     assert not (region & house.grid.occupancy).any() and not (region & (house.room_labels < 0)).any()
     assert 0.5 < region.sum() / house.grid.free.sum() <= 1.0
     assert np.isfinite(world.wind_now().velocity).all()
+
+
+@pytest.mark.slow
+def test_experiment_on_the_real_house_two_seeds(tmp_path, capsys):
+    """`psgsl experiment --world` on the lab's house: 2 seeds from source B1 finish and write their summaries."""
+    import json
+
+    from psgsl_pgm._cli import main
+    from psgsl_pgm.experiment import VARIANTS
+
+    path = write_real_world(tmp_path)
+    out = tmp_path / "exp"
+    assert main(["experiment", "--world", str(path), "--sources", "B1", "--seeds", "2", "--estimators",
+                 "infotaxis", "--workers", "2", "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "B1-infotaxis" / "summary.json").read_text())
+    assert summary["n_runs"] == 2 and summary["seeds"] == [0, 1]
+    for name in VARIANTS:
+        assert np.isfinite(summary[name]["final_error"]["mean"])
+    for fig in ("error-chart.png", "progression.png", "room-types.png"):
+        assert (out / "B1-infotaxis" / fig).stat().st_size > 0
+    assert "B1/infotaxis" in json.loads((out / "summary.json").read_text())
