@@ -230,3 +230,16 @@ def test_world_check_bad_file_one_line_exit_2_nothing_written(flat):
 def test_world_check_refuses_an_unwritable_png_before_work(flat, capsys):
     assert main(["world", "check", str(flat / "world.yaml"), "--png", str(flat / "no" / "w.png")]) == 2
     assert "--png: directory" in capsys.readouterr().err
+
+
+def test_the_world_figure_is_readable(flat):
+    import matplotlib.pyplot as plt
+
+    from psgsl_pgm._cli_world import plot_world
+    from psgsl_pgm.sim import figure_problems
+
+    for spec in (load_world(flat / "world.yaml"), default_world()):
+        fig = plot_world(spec)
+        assert figure_problems(fig) == []
+        assert fig.axes[0].get_xlabel() == "x [m]" and fig.axes[0].get_ylabel() == "y [m]"
+        plt.close(fig)
