@@ -19,8 +19,10 @@ def fuse(*posteriors, prior=None):
     .. math:: p(s_c | e_1, \dots, e_m) \propto \frac{\prod_j p(s_c | e_j)}{p(s_c)^{m-1}},
 
     which for a uniform prior and m = 2 is eq. ``combined-conditionals``,
-    p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z). Computed in log space (no underflow for any number of cells or
-    inputs).
+    p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z). Computed in linear space in one compiled pass per input (which
+    also validates it); the cells whose product would leave float64's normal range (below 2^-1000, e.g.
+    1e-300 · 1e-300) are recomputed in log space, so the result is exact to round-off for any number of
+    cells or inputs and never NaN.
 
     Parameters
     ----------
@@ -50,34 +52,77 @@ def fuse(*posteriors, prior=None):
     """
     if len(posteriors) == 0:
         raise TypeError("fuse needs at least one posterior, got none")
+    from ._kernel import fuse_finish, fuse_pair, fuse_step  # compiled on first use (numba)
+
     arrays = [as_float_array(p, f"posteriors[{j}]", min_ndim=1) for j, p in enumerate(posteriors)]
     shape = arrays[0].shape
     for j, a in enumerate(arrays):
         if a.shape != shape:
             raise ValueError(f"posteriors[{j}] must have the shape of posteriors[0], {shape}, got {describe(a)}")
-        check_nonnegative(a, f"posteriors[{j}]")
-        check_sums(np.sum(a, dtype=np.float64), f"posteriors[{j}] (over all cells)", a.dtype)
     out_dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
+    flat = [np.ascontiguousarray(a).reshape(-1) for a in arrays]
+    if flat[0].size == 0:
+        check_nonnegative(arrays[0], "posteriors[0]")  # names the empty input
 
-    # log 0 = −inf is intended; −inf − (−inf) on cells outside every support is masked below
-    with np.errstate(divide="ignore", invalid="ignore"):
-        log_p = np.sum([np.log(a, dtype=np.float64) for a in arrays], axis=0)  # Σ_j log p(s|e_j)
-        if prior is not None:
-            pr = as_float_array(prior, "prior", dtype=np.float64)
-            if pr.shape != shape:
-                raise ValueError(f"prior must have the posteriors' shape {shape}, got {describe(pr)}")
-            check_nonnegative(pr, "prior")
-            check_sums(pr.sum(), "prior (over all cells)", pr.dtype)
-            support = np.isfinite(log_p)
-            if np.any(support & (pr == 0)):
-                cell = np.argwhere(support & (pr == 0))[0]
-                raise ValueError(f"prior is zero at cell {tuple(int(i) for i in cell)} where every posterior is positive")
-            log_p = np.where(support, log_p - (len(arrays) - 1) * np.log(pr), -np.inf)  # ÷ p(s)^(m-1)
+    # Linear space: p_c = Π_j p(s_c|e_j), one pass per input that also checks it (sign, finiteness, sum).
+    prod = np.empty(flat[0].size)
+    if len(flat) == 1:
+        stats = [fuse_step(prod, flat[0], True)]
+    else:
+        stats = list(fuse_pair(prod, flat[0], flat[1]))
+        stats += [fuse_step(prod, a, False) for a in flat[2:]]
+    for j, (a, st) in enumerate(zip(arrays, stats)):
+        if st[0] > 0 or not np.isfinite(st[1]):
+            check_nonnegative(a, f"posteriors[{j}]")  # locates and names the bad entry
+        check_sums(st[1], f"posteriors[{j}] (over all cells)", a.dtype)
 
-    norm = logsumexp(log_p)
-    if not np.isfinite(norm):
+    extra = len(arrays) - 1
+    if prior is None:
+        pr = np.empty(0)
+    else:
+        pr = as_float_array(prior, "prior", dtype=np.float64)
+        if pr.shape != shape:
+            raise ValueError(f"prior must have the posteriors' shape {shape}, got {describe(pr)}")
+        check_nonnegative(pr, "prior")
+        check_sums(pr.sum(), "prior (over all cells)", pr.dtype)
+        pr = np.ascontiguousarray(pr).reshape(-1)
+    linear_total, marked, zero_support = fuse_finish(prod, pr, extra)  # ÷ p(s)^(m-1), Σ_c
+    if zero_support:
+        support = np.logical_and.reduce([a > 0 for a in flat])
+        cell = np.unravel_index(np.flatnonzero(support & (pr == 0))[0], shape)
+        raise ValueError(f"prior is zero at cell {tuple(int(i) for i in cell)} where every posterior is positive")
+    if marked:
+        return _with_log_space_cells(prod, flat, pr, extra, linear_total, arrays).astype(out_dtype, copy=False)
+    if not linear_total > 0:
         raise ValueError(_conflict_message(arrays))
-    return np.exp(log_p - norm).astype(out_dtype, copy=False)
+    out = np.divide(prod, linear_total, out=prod if out_dtype == np.float64 else np.empty(prod.size, out_dtype),
+                    casting="same_kind")
+    return out.reshape(shape)
+
+
+def _with_log_space_cells(prod, flat, pr, extra, linear_total, arrays):
+    """Normalise when some cells' products left the safe range of float64 (marked −1 in ``prod``).
+
+    Only those cells are recomputed in log space, log p_c = Σ_j log p(s_c|e_j) − (m−1) log p(s_c); the
+    normaliser T = Σ_linear p + Σ_marked exp(log p) is formed in log space, and the linear cells are scaled
+    by (p / Σ_linear) · (Σ_linear / T), which is exact whenever the result is a normal float.
+    """
+    idx = np.flatnonzero(prod < 0)
+    log_p = np.sum([np.log(a[idx], dtype=np.float64) for a in flat], axis=0)
+    if extra and pr.size:
+        log_p -= extra * np.log(pr[idx])
+    log_linear = np.log(linear_total) if linear_total > 0 else -np.inf
+    log_total = np.logaddexp(log_linear, logsumexp(log_p))
+    if not np.isfinite(log_total):
+        raise ValueError(_conflict_message(arrays))
+    out = prod
+    if linear_total > 0:
+        out /= linear_total
+        out *= np.exp(log_linear - log_total)
+    else:
+        out[:] = 0.0
+    out[idx] = np.exp(log_p - log_total)
+    return out.reshape(arrays[0].shape)
 
 
 def _conflict_message(arrays) -> str:

@@ -1,67 +1,542 @@
-"""One fused pass over a large ``(n, k)`` belief matrix: products with a few k-vectors and its minimum.
+"""Compiled single-pass kernels over the ``(n, k)`` class beliefs and over per-cell vectors.
 
-Validating ``class_probs`` (finite, non-negative, rows summing to 1) and computing the semantic weights are
-all memory-bound, so doing them in separate NumPy passes costs one full read of the array each. Here the rows
-are processed in cache-sized blocks, each block read once from memory and then reused from cache for the
-matrix product (weights and row sums together) and the minimum; the blocks are shared between two threads
-(NumPy releases the GIL in both operations). This is a loop over blocks of ~10^4 rows, never over cells.
+Everything here is memory-bound: the cost of the closed form is one read of ``class_probs``. Each kernel reads
+every row once and, while the row (k values) is in L1, derives every per-cell quantity the caller needs — the
+semantic weight w_c = q_c · ρ, the row sum, the number of negative entries, the mass on zero-prior classes and,
+for the information gain, the central moments of ρ under q_c. Rows are grouped in fixed chunks of
+:data:`CHUNK` cells; the compiled loops release the GIL, and :func:`run` hands contiguous ranges of chunks to
+one thread per core. Partial sums are kept per chunk and added in chunk order, so results do not depend on
+the number of threads.
+
+Floating-point contract: float32 beliefs are read as float32 and accumulated in float64 registers (no float64
+copy of the array is ever made); NaN and ±inf propagate (the fast-math flags allow re-association, which lets
+the compiler vectorise the sums, but not ``nnan``/``ninf``). A NaN or inf entry makes its row sum non-finite,
+which the row-sum statistic reports as an infinite deviation.
+
+Kernels are compiled by numba on first call and cached on disk (``cache=True``); there is no interpreted
+twin. The ``_``-prefixed functions are the compiled loops; the public names allocate their outputs and
+combine the per-chunk partials.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 
+import numba as nb
 import numpy as np
 
-__all__ = ["fused_products"]
+__all__ = [
+    "CHUNK",
+    "PARALLEL_MIN",
+    "combine_stats",
+    "n_chunks",
+    "run",
+    "ORDER",
+    "belief_weights",
+    "belief_moments",
+    "entropy_terms",
+    "gain_from_moments",
+    "fuse_pair",
+    "fuse_step",
+    "fuse_finish",
+]
 
-_BLOCK_BYTES = 1 << 20  # ~1 MiB of beliefs per block: stays in L2 while it is reused
-_PARALLEL_MIN_BYTES = 64 << 20  # below this, thread start-up costs more than it saves
-_N_THREADS = max(1, min(2, os.cpu_count() or 1))
+CHUNK = 4096  # cells per parallel work item: large enough to amortise scheduling, small enough to balance
+ORDER = 7  # information-gain series order J (the kernels below hold μ_2..μ_7 and ν_1..ν_6 in registers)
+TINY = 2.0**-1000  # a product below this (of positive factors) may have lost bits: that cell goes to log space
+HUGE = 2.0**1000  # a quotient above this (division by a tiny prior) goes to log space too
+
+PARALLEL_MIN = 1 << 23  # elements read below which one thread is used: ~5 ms of work, more than a thread
+#                        hand-off costs even on a loaded machine
+
+_FASTMATH = {"reassoc", "contract", "nsz", "arcp"}  # never nnan / ninf: NaN and inf must propagate
+_JIT = dict(nogil=True, cache=True, fastmath=_FASTMATH, error_model="numpy")
+_THREADS = max(1, min(8, os.cpu_count() or 1))
 _POOL: ThreadPoolExecutor | None = None
 
 
 def _pool() -> ThreadPoolExecutor:
     global _POOL
     if _POOL is None:  # created on first use, never at import
-        _POOL = ThreadPoolExecutor(max_workers=_N_THREADS, thread_name_prefix="psgsl")
+        _POOL = ThreadPoolExecutor(max_workers=_THREADS, thread_name_prefix="psgsl-kernel")
     return _POOL
 
 
-def _run(q: np.ndarray, vectors: np.ndarray, out: np.ndarray, start: int, stop: int, rows: int) -> float:
-    lo = np.inf
-    for a in range(start, stop, rows):
-        b = min(a + rows, stop)
-        block = q[a:b]
-        np.matmul(block, vectors, out=out[a:b])
-        lo = min(lo, float(block.min()))  # NaN propagates through min, so this also detects NaN
-    return lo
+def run(kernel, n: int, work: int, *args) -> None:
+    """Run ``kernel(*args, c0, c1)`` over the chunks [0, ⌈n / CHUNK⌉) of n cells.
+
+    The kernels release the GIL, so when ``work`` (elements read) is at least :data:`PARALLEL_MIN` the chunks
+    are split into one contiguous range per core and run on a thread pool; otherwise on the calling thread.
+    Every kernel writes per-chunk partial results into arrays the caller owns, so the outcome does not depend
+    on how the chunks were split.
+    """
+    nch = (n + CHUNK - 1) // CHUNK
+    parts = min(_THREADS, nch) if work >= PARALLEL_MIN else 1
+    if parts <= 1:
+        kernel(*args, 0, nch)
+        return
+    edges = [nch * i // parts for i in range(parts + 1)]
+    futures = [_pool().submit(kernel, *args, edges[i], edges[i + 1]) for i in range(1, parts)]
+    kernel(*args, edges[0], edges[1])  # the calling thread takes the first range itself
+    for fut in futures:
+        fut.result()
 
 
-def fused_products(q: np.ndarray, vectors: np.ndarray) -> tuple[np.ndarray, float]:
-    """Return ``q @ vectors`` and ``q.min()`` from a single blocked pass over ``q``.
+def n_chunks(n: int) -> int:
+    """Number of :data:`CHUNK`-cell chunks (rows of the partial-result arrays) for n cells."""
+    return (n + CHUNK - 1) // CHUNK
+
+
+def combine_stats(part: np.ndarray) -> np.ndarray:
+    """Belief statistics from per-chunk partials (columns: negatives, worst |Σ−1|, its row, leak, total)."""
+    out = np.zeros(5)
+    if part.shape[0]:
+        out[0] = part[:, 0].sum()
+        best = int(np.argmax(part[:, 1]))
+        out[1], out[2] = part[best, 1], part[best, 2]
+        out[3] = part[:, 3].max()
+        out[4] = part[:, 4].sum()
+    return out
+
+
+@nb.njit(**_JIT)
+def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
+    """Rows of chunks [c0, c1): w = q @ rho (accumulated in q's dtype, like a BLAS GEMV) and statistics.
+
+    Only the weight and the row sum are reduced per row; the minimum and the zero-prior mass are kept per
+    class (element-wise, no per-row horizontal reduction) and reduced once per chunk.
+    """
+    n, k = q.shape
+    nought = rho[0] - rho[0]  # 0 in q's dtype (rho is finite)
+    lo = np.empty(k, q.dtype)
+    leak = np.empty(k, q.dtype)
+    for c in range(c0, c1):
+        lo[:] = nought
+        leak[:] = nought
+        worst = 0.0
+        worst_row = 0
+        tot = 0.0
+        for r in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            acc = nought
+            s = nought
+            for i in range(k):
+                x = q[r, i]
+                acc += x * rho[i]
+                s += x
+                lo[i] = min(lo[i], x)
+            if has_zero:
+                for i in range(k):
+                    leak[i] = max(leak[i], q[r, i] * zero[i])
+            w[r] = acc
+            tot += acc
+            d = abs(np.float64(s) - 1.0)
+            if d != d:
+                d = math.inf
+            if d > worst:
+                worst = d
+                worst_row = r
+        part[c, 0] = -lo.min()
+        part[c, 1] = worst
+        part[c, 2] = worst_row
+        part[c, 3] = leak.max()
+        part[c, 4] = tot
+
+
+@nb.njit(**_JIT)
+def _belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part, c0, c1):
+    """Rows of chunks [c0, c1): w, Jensen gap, μ_2…μ_7 (and ν_1…ν_6), Σ f w and the belief statistics."""
+    n, k = q.shape
+    has_f = f.shape[0] > 0
+    for c in range(c0, c1):
+        neg = 0.0
+        worst = 0.0
+        worst_row = 0
+        leak = 0.0
+        tot = 0.0
+        for r in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            acc = 0.0
+            s = 0.0
+            z = 0.0
+            v = 0.0
+            lo = 0.0
+            for i in range(k):
+                x = q[r, i]
+                acc += x * rho[i]
+                v += x * rho_log_rho[i]
+                s += x
+                z += x * zero[i]
+                lo += min(x, 0.0)
+            m2 = m3 = m4 = m5 = m6 = m7 = 0.0
+            if paper:
+                n1 = n2 = n3 = n4 = n5 = n6 = 0.0
+                for i in range(k):
+                    x = q[r, i]
+                    d = rho[i] - acc
+                    t = x * d
+                    n1 += t * rho_log_rho[i]
+                    t *= d
+                    m2 += t
+                    n2 += t * rho_log_rho[i]
+                    t *= d
+                    m3 += t
+                    n3 += t * rho_log_rho[i]
+                    t *= d
+                    m4 += t
+                    n4 += t * rho_log_rho[i]
+                    t *= d
+                    m5 += t
+                    n5 += t * rho_log_rho[i]
+                    t *= d
+                    m6 += t
+                    n6 += t * rho_log_rho[i]
+                    t *= d
+                    m7 += t
+                mom[r, 7] = n1
+                mom[r, 8] = n2
+                mom[r, 9] = n3
+                mom[r, 10] = n4
+                mom[r, 11] = n5
+                mom[r, 12] = n6
+            else:
+                for i in range(k):
+                    x = q[r, i]
+                    d = rho[i] - acc
+                    t = x * d * d
+                    m2 += t
+                    t *= d
+                    m3 += t
+                    t *= d
+                    m4 += t
+                    t *= d
+                    m5 += t
+                    t *= d
+                    m6 += t
+                    t *= d
+                    m7 += t
+            w[r] = acc
+            mom[r, 0] = v - acc * math.log(acc) if acc > 0 else v  # Jensen gap v − w log w ≥ 0
+            mom[r, 1] = m2
+            mom[r, 2] = m3
+            mom[r, 3] = m4
+            mom[r, 4] = m5
+            mom[r, 5] = m6
+            mom[r, 6] = m7
+            tot += (f[r] if has_f else f_uniform) * acc
+            neg += lo
+            d = abs(s - 1.0)
+            if d != d:
+                d = math.inf
+            if d > worst:
+                worst = d
+                worst_row = r
+            if z > leak:
+                leak = z
+        part[c, 0] = -neg
+        part[c, 1] = worst
+        part[c, 2] = worst_row
+        part[c, 3] = leak
+        part[c, 4] = tot
+
+
+@nb.njit(**_JIT)
+def _entropy_terms(w, f, f_uniform, total, part, c0, c1):
+    """H(S) = −Σ_n P_n log P_n with P_n = f_n w_n / U (``total`` = U)."""
+    n = w.shape[0]
+    has_f = f.shape[0] > 0
+    for c in range(c0, c1):
+        h = 0.0
+        for r in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            p = (f[r] if has_f else f_uniform) * w[r] / total
+            if p > 0:
+                h -= p * math.log(p)
+        part[c] = h
+
+
+@nb.njit(**_JIT)
+def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy, radius, paper, out, c0, c1):
+    r"""I(S; O_n) for every cell from its moments (series) or, where the series converges slowly, its row.
+
+    With a_n = f_n / U and x_ni = a_n (ρ_i − w_n): the series is used where a_n · max_i |ρ_i − w_n| ≤
+    ``radius`` (truncation ≲ radius^8 relative); other cells sum φ(x_ni) (exact) or the paper's terms over
+    their row of ``q`` directly. Formulas: module docstring of :mod:`psgsl_pgm._infogain`.
+    """
+    n, k = q.shape
+    has_f = f.shape[0] > 0
+    rmax = rho.max()
+    rmin = rho.min()
+    for r in range(c0 * CHUNK, min(n, c1 * CHUNK)):
+        a = (f[r] if has_f else f_uniform) / total
+        wn = w[r]
+        jensen = mom[r, 0]
+        spread = max(rmax - wn, wn - rmin)
+        wlw = wn * math.log(wn) if wn > 0 else 0.0
+        alog = a * math.log(a) if a > 0 else 0.0
+        if a * spread <= radius:
+            # (−a)^j μ_j, j = 2..7 (μ_1 = 0 exactly)
+            na = -a
+            p2 = na * na
+            p3 = p2 * na
+            p4 = p3 * na
+            p5 = p4 * na
+            p6 = p5 * na
+            p7 = p6 * na
+            m2, m3, m4, m5, m6, m7 = mom[r, 1], mom[r, 2], mom[r, 3], mom[r, 4], mom[r, 5], mom[r, 6]
+            t2, t3, t4, t5, t6, t7 = p2 * m2, p3 * m3, p4 * m4, p5 * m5, p6 * m6, p7 * m7
+            if not paper:
+                # Σ_i q_i φ(x_i) = Σ_{j≥2} (−a)^j μ_j / (j (j−1))
+                g = a * jensen - (t2 / 2.0 + t3 / 6.0 + t4 / 12.0 + t5 / 20.0 + t6 / 30.0 + t7 / 42.0)
+                out[r] = g if g > 0.0 else 0.0
+            else:
+                one_minus_s0 = -(t2 + t3 + t4 + t5 + t6 + t7)  # 1 − Σ q / Z
+                t1 = na * m2 + p2 * m3 + p3 * m4 + p4 * m5 + p5 * m6 + p6 * m7  # Σ q (ρ − w) / Z
+                n1, n2, n3, n4, n5, n6 = mom[r, 7], mom[r, 8], mom[r, 9], mom[r, 10], mom[r, 11], mom[r, 12]
+                s2_gap = jensen + (
+                    na * n1  # μ_1 = 0
+                    + p2 * (n2 - wlw * m2)
+                    + p3 * (n3 - wlw * m3)
+                    + p4 * (n4 - wlw * m4)
+                    + p5 * (n5 - wlw * m5)
+                    + p6 * (n6 - wlw * m6)
+                )
+                s3 = -(t2 / 2.0 + t3 / 3.0 + t4 / 4.0 + t5 / 5.0 + t6 / 6.0 + t7 / 7.0)  # Σ q log Z
+                out[r] = entropy * one_minus_s0 + alog * t1 + a * s2_gap - s3
+        else:
+            if not paper:
+                acc = 0.0
+                for i in range(k):
+                    x = a * (rho[i] - wn)
+                    zz = 1.0 + x
+                    phi = (zz * math.log1p(x) if zz > 0 else 0.0) - x  # φ(x) = Z log Z − x
+                    acc += q[r, i] * phi
+                g = a * jensen - acc
+                out[r] = g if g > 0.0 else 0.0
+            else:
+                s_x = 0.0
+                s_d = 0.0
+                s_gap = 0.0
+                s_log = 0.0
+                for i in range(k):
+                    qi = q[r, i]
+                    d = rho[i] - wn
+                    x = a * d
+                    zz = 1.0 + x
+                    if zz > 0:  # impossible outcomes (Z = 0) contribute nothing
+                        qz = qi / zz
+                        s_x += qz * x
+                        s_d += qz * d
+                        s_gap += qz * (rho_log_rho[i] - wlw)
+                        s_log += qi * math.log1p(x)
+                out[r] = entropy * s_x + alog * s_d + a * s_gap - s_log
+
+
+@nb.njit(**_JIT)
+def _fuse_pair(p, a, b, part, c0, c1):
+    """p = a · b element-wise (float64), with the checks of both inputs; see :func:`fuse_step`."""
+    n = p.shape[0]
+    for c in range(c0, c1):
+        neg_a = 0
+        neg_b = 0
+        sa = 0.0
+        sb = 0.0
+        unsafe = 0
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            x = np.float64(a[i])
+            y = np.float64(b[i])
+            neg_a += x < 0
+            neg_b += y < 0
+            sa += x
+            sb += y
+            z = x * y
+            bad = (z < TINY) & (x > 0) & (y > 0)
+            unsafe += bad
+            p[i] = -1.0 if bad else z
+        part[c, 0] = neg_a
+        part[c, 1] = sa
+        part[c, 2] = neg_b
+        part[c, 3] = sb
+        part[c, 4] = unsafe
+
+
+@nb.njit(**_JIT)
+def _fuse_step(p, a, first, part, c0, c1):
+    """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a).
+
+    A cell whose product of positive factors falls below :data:`TINY` is marked −1 (it is recomputed in log
+    space by the caller) and stays marked. Returns [negative entries of a, Σ a, newly marked cells].
+    """
+    n = p.shape[0]
+    for c in range(c0, c1):
+        neg = 0
+        s = 0.0
+        unsafe = 0
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            x = np.float64(a[i])
+            neg += x < 0
+            s += x
+            if first:
+                p[i] = x
+            else:
+                pc = p[i]
+                z = pc * x
+                bad = (z < TINY) & (pc > 0) & (x > 0)
+                unsafe += bad
+                p[i] = -1.0 if (bad | (pc < 0)) else z
+        part[c, 0] = neg
+        part[c, 1] = s
+        part[c, 2] = unsafe
+
+
+@nb.njit(**_JIT)
+def _fuse_finish(p, prior, extra, part, c0, c1):
+    """Divide the product by prior^extra (when ``prior`` is non-empty) and sum the cells not marked.
+
+    A quotient above :data:`HUGE` is marked −1 too. Returns [Σ unmarked p, marked cells, cells where the
+    product is positive (or marked) but the prior is zero].
+    """
+    n = p.shape[0]
+    has_prior = prior.shape[0] > 0
+    for c in range(c0, c1):
+        s = 0.0
+        marked = 0
+        zero_support = 0
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            y = p[i]
+            if has_prior:
+                pr = prior[i]
+                if y != 0.0 and pr == 0.0:
+                    zero_support += 1
+                elif y > 0.0:
+                    for _ in range(extra):
+                        y /= pr
+                    if y > HUGE:
+                        y = -1.0
+                    p[i] = y
+            if y < 0.0:
+                marked += 1
+            else:
+                s += y
+        part[c, 0] = s
+        part[c, 1] = marked
+        part[c, 2] = zero_support
+
+
+# --- Python entry points: allocate outputs, run the chunks, combine the partials in chunk order -------------
+
+
+def belief_weights(q, rho, zero):
+    """w = q @ rho and the validation statistics of ``q``, in one pass over ``q``.
 
     Parameters
     ----------
-    q : (n, k) ndarray
-        C-contiguous floating matrix.
-    vectors : (k, p) ndarray
-        A few column vectors (p small), same dtype as ``q``.
+    q : (n, k) float32 or float64 ndarray, C-contiguous
+    rho : (k,) float64 ndarray
+    zero : (k,) float64 ndarray
+        1.0 for classes with zero prior, else 0.0.
 
     Returns
     -------
-    products : (n, p) ndarray
-    minimum : float
-        ``q.min()`` (NaN if ``q`` has a NaN).
+    w : (n,) float64 ndarray
+        Accumulated in the dtype of ``q`` (float32 sums for float32 beliefs, as a BLAS GEMV would).
+    stats : (5,) float64 ndarray
+        [minus the sum of the negative entries (> 0 iff there is one), largest |row sum − 1| (inf for a
+        non-finite row sum), the row where it occurs, largest mass on zero-prior classes, Σ_c w_c].
     """
-    n, k = q.shape
-    out = np.empty((n, vectors.shape[1]), dtype=np.result_type(q, vectors))
-    rows = max(1, _BLOCK_BYTES // max(1, k * q.itemsize))
-    if q.nbytes < _PARALLEL_MIN_BYTES or _N_THREADS == 1:
-        return out, _run(q, vectors, out, 0, n, rows)
-    edges = np.linspace(0, n, _N_THREADS + 1).astype(int)
-    futures = [
-        _pool().submit(_run, q, vectors, out, int(edges[i]), int(edges[i + 1]), rows) for i in range(_N_THREADS)
-    ]
-    return out, min(f.result() for f in futures)
+    n = q.shape[0]
+    w = np.empty(n)
+    part = np.zeros((n_chunks(n), 5))
+    run(_belief_weights, n, q.size, q, rho.astype(q.dtype), zero.astype(q.dtype), bool(zero.any()), w, part)
+    return w, combine_stats(part)
+
+
+def belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper):
+    r"""Per-cell weight, Jensen gap and central moments for the information gain, in one pass over ``q``.
+
+    For each cell n with w_n = q_n · ρ: the Jensen gap v_n − w_n log w_n (v_n = q_n · ρ log ρ), the central
+    moments μ_j = Σ_i q_ni (ρ_i − w_n)^j for j = 2 … 7 and, when ``paper``, ν_j = Σ_i q_ni ρ_i log ρ_i
+    (ρ_i − w_n)^j for j = 1 … 6. Each row is read from memory once; the second loop over it runs from L1.
+
+    Parameters
+    ----------
+    q : (n, k) float32 or float64 ndarray, C-contiguous
+    rho, rho_log_rho, zero : (k,) float64 ndarray
+    f : (n,) float64 ndarray, or empty
+        Olfactory posterior; when empty every cell has weight ``f_uniform``.
+    f_uniform : float
+    paper : bool
+        Also compute the ν moments.
+
+    Returns
+    -------
+    w : (n,) float64 ndarray
+    mom : (n, 7) or (n, 13) float64 ndarray
+        Columns [Jensen gap, μ_2 … μ_7] (+ [ν_1 … ν_6] when ``paper``).
+    stats : (5,) float64 ndarray
+        As :func:`belief_weights`, with the last entry U = Σ_c f_c w_c instead of Σ_c w_c.
+    """
+    n = q.shape[0]
+    w = np.empty(n)
+    mom = np.empty((n, 13 if paper else 7))
+    part = np.zeros((n_chunks(n), 5))
+    run(_belief_moments, n, q.size * (3 if paper else 2), q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part)
+    return w, mom, combine_stats(part)
+
+
+def entropy_terms(w, f, f_uniform, total) -> float:
+    """H(S) = −Σ_n P_n log P_n with P_n = f_n w_n / U (``total`` = U)."""
+    n = w.shape[0]
+    part = np.zeros(n_chunks(n))
+    run(_entropy_terms, n, 8 * n, w, f, f_uniform, total, part)
+    return float(part.sum())
+
+
+def gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy, radius, paper):
+    r"""I(S; O_n) for every cell from its moments (series) or, where the series converges slowly, its row.
+
+    With a_n = f_n / U and x_ni = a_n (ρ_i − w_n): the series is used where a_n · max_i |ρ_i − w_n| ≤
+    ``radius`` (truncation ≲ radius^8 relative); other cells sum φ(x_ni) (exact) or the paper's terms over
+    their row of ``q`` directly. Formulas: module docstring of :mod:`psgsl_pgm._infogain`.
+    """
+    n = q.shape[0]
+    out = np.empty(n)
+    run(_gain_from_moments, n, 4 * mom.size, q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy, radius,
+        paper, out)
+    return out
+
+
+def fuse_pair(p, a, b):
+    """p = a · b element-wise (float64), checking both inputs; returns ([neg a, Σ a, marked], [neg b, Σ b, marked]).
+
+    A cell whose product of positive factors falls below :data:`TINY` is marked −1 (the caller recomputes it
+    in log space).
+    """
+    n = p.shape[0]
+    part = np.zeros((n_chunks(n), 5))
+    run(_fuse_pair, n, 3 * n, p, a, b, part)
+    t = part.sum(axis=0)
+    return t[[0, 1, 4]], t[[2, 3, 4]]
+
+
+def fuse_step(p, a, first: bool):
+    """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a); marks as :func:`fuse_pair`.
+
+    Returns [negative entries of a, Σ a, newly marked cells].
+    """
+    n = p.shape[0]
+    part = np.zeros((n_chunks(n), 3))
+    run(_fuse_step, n, 3 * n, p, a, first, part)
+    return part.sum(axis=0)
+
+
+def fuse_finish(p, prior, extra: int):
+    """Divide the product by prior^extra (``prior`` non-empty) and sum the unmarked cells, in place.
+
+    A quotient above :data:`HUGE` is marked −1 too. Returns (Σ unmarked p, marked cells, cells where the
+    product is positive or marked but the prior is zero).
+    """
+    n = p.shape[0]
+    part = np.zeros((n_chunks(n), 3))
+    run(_fuse_finish, n, 3 * n, p, prior, extra, part)
+    t = part.sum(axis=0)
+    return float(t[0]), int(t[1]), int(t[2])

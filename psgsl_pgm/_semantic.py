@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._beliefs_check import belief_products
+from ._beliefs_check import check_belief_stats, flat_beliefs
 from ._ratios import class_ratio
 from ._validate import as_float_array, check_distribution, describe
 
@@ -113,18 +113,28 @@ def semantic_source_probability(
     >>> semantic_source_probability(beliefs, lik, prior).round(4)
     array([0.604, 0.396])
     """
+    from ._kernel import belief_weights  # compiled on first use (numba), not at package import
+
     ratio = class_ratio(source_likelihood, class_prior, gas_probs)
-    bp = belief_products(class_probs, ratio.rho[:, None], zero_prior=ratio.zero_prior, validate=validate)
-    weights = bp.products[:, 0].reshape(bp.cell_shape)  # w_c = Σ_i p(o_ci|z_c) ρ_i
+    q2, cell_shape = flat_beliefs(class_probs, ratio.k)
+    # one pass over the beliefs: weights w_c = Σ_i p(o_ci|z_c) ρ_i (float64 accumulators) and the statistics
+    # that validate them
+    w, stats = belief_weights(q2, ratio.rho, ratio.zero_prior.astype(np.float64))
+    if validate:
+        check_belief_stats(q2, stats, ratio.zero_prior)
+    weights = w.reshape(cell_shape)
+    total = stats[4]  # Σ_c w_c, from the same pass
     if source_prior is not None:
-        weights = weights * cell_distribution(source_prior, "source_prior", bp.cell_shape)  # p(s_c) p(z|s_c)
-    weights = column_sum(weights, column_axis, len(bp.cell_shape))  # Σ_{v∈c} p(s_v|z)
+        weights *= cell_distribution(source_prior, "source_prior", cell_shape)  # p(s_c) p(z|s_c)
+        total = np.sum(weights, dtype=np.float64)
+    weights = column_sum(weights, column_axis, len(cell_shape))  # Σ_{v∈c} p(s_v|z)
     if not normalize:
-        return weights
-    total = np.sum(weights, dtype=np.float64)
+        return weights.astype(q2.dtype, copy=False)
     if not total > 0:
         raise ValueError(
             "no cell can hold the source: every cell's class beliefs (times source_prior) give zero weight "
             "to the classes that source_likelihood allows"
         )
-    return (weights / total).astype(weights.dtype, copy=False)
+    # normalise in float64 (in place), round once to the beliefs' dtype (float32 in, float32 out)
+    out = weights if q2.dtype == np.float64 else np.empty(weights.shape, q2.dtype)
+    return np.divide(weights, total, out=out, casting="same_kind")
