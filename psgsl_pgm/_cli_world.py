@@ -96,6 +96,8 @@ def format_summary(s: dict) -> str:
         lines.append(f"  p(o | room) for {', '.join(o['rooms'])}"
                      + (f"; at the class prior: {', '.join(o['rooms_at_class_prior'])}"
                         if o["rooms_at_class_prior"] else ""))
+    else:
+        lines.append("  no p(o | room) (give room_classes): every room starts at the class prior")
     if s["gas"]:
         lines.append(f"target gas: {s['gas']}")
     if s["semantic_map"] is not None:

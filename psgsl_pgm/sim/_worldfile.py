@@ -203,8 +203,8 @@ class WorldSpec:
             sources[name] = {"position": [float(xy[0]), float(xy[1])],
                              "room": house.room_names[room] if room >= 0 else None}
         ont = self.ontology
-        no_rooms = sorted(set(house.room_names) - {r for r in house.room_names
-                                                   if any(_same(r, o) for o in ont.rooms)}) if ont.rooms else []
+        # rooms without p(o | room) in the ontology start from the class prior (no room evidence)
+        no_rooms = [r for r in dict.fromkeys(house.room_names) if not any(_same(r, o) for o in ont.rooms)]
         return {
             "world": str(self.path),
             "grid": {"rows": g.shape[0], "cols": g.shape[1], "resolution": g.resolution,

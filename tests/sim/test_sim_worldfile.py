@@ -72,7 +72,7 @@ def test_load_world_and_its_summary(flat):
     assert [w["role"] for w in s["windows"]] == ["inlet", "outlet"] and all(w["cells"] > 0 for w in s["windows"])
     assert s["sources"]["oven"] == {"position": pytest.approx([1.0, 0.6]), "room": "Kitchen"}
     assert s["sources"]["S1"]["room"] == "LivingRoom"
-    assert s["ontology"]["rooms_at_class_prior"] == []  # no room classes given
+    assert s["ontology"]["rooms_at_class_prior"] == ["Kitchen", "LivingRoom"]  # no room classes given
     # objects of classes the ontology does not list are "other" for the semantic term
     assert sorted({o.class_name for o in house.objects}) == ["other", "oven"]
     assert house.classes == spec.ontology.classes
