@@ -65,18 +65,20 @@ def test_a_mappers_beliefs_replace_the_camera(tmp_path):
 
 
 def test_experiment_command_with_a_world(tmp_path, capsys):
-    world = write_flat(tmp_path)
+    world = write_flat(tmp_path, sources={"stove": "oven"})  # without --sources: the world's sources
     out = tmp_path / "out"
     code = main(["experiment", "--world", str(world), "--seeds", "1", "--estimators", "infotaxis", "--workers", "1",
                  "--out", str(out), "--quiet"])
     assert code == 0
-    text = capsys.readouterr().out
-    assert "sources corner, stove" in text  # the order of the world file (written sorted)
-    summary = json.loads((out / "summary.json").read_text())
-    assert set(summary) == {"stove/infotaxis", "corner/infotaxis"}
-    for group in ("stove-infotaxis", "corner-infotaxis"):
-        assert set(json.loads((out / group / "summary.json").read_text())) >= set(VARIANTS)
-        assert (out / group / "progression.png").stat().st_size > 0
+    assert "sources stove, 1 seeds, gas 'smoke'" in capsys.readouterr().out
+    assert set(json.loads((out / "summary.json").read_text())) == {"stove/infotaxis"}
+    assert set(json.loads((out / "stove-infotaxis" / "summary.json").read_text())) >= set(VARIANTS)
+    assert (out / "stove-infotaxis" / "progression.png").stat().st_size > 0
+    # the stored run names its world: another world file in the same output directory is refused
+    other = write_flat(tmp_path / "out", sources={"stove": "oven"})
+    assert main(["experiment", "--world", str(other), "--seeds", "1", "--estimators", "infotaxis", "--workers", "1",
+                 "--out", str(out), "--quiet"]) == 2
+    assert "computed with another configuration" in capsys.readouterr().err
 
 
 def test_experiment_command_bad_world_one_line_exit_2(tmp_path, capsys):
