@@ -9,6 +9,7 @@ import numpy as np
 import yaml
 
 from ._validate import SUM_RTOL, as_float_array, check_distribution, describe
+from ._yaml import load_yaml
 
 __all__ = ["Ontology", "OTHER"]
 
@@ -217,9 +218,11 @@ class Ontology:
 
         Raises
         ------
+        FileNotFoundError
+            No such file.
         ValueError
-            Unreadable or malformed files, duplicate keys, unknown or missing keys, bad numbers — the message
-            starts with the file and names the key.
+            Unreadable, non-UTF-8 or malformed files, duplicate keys, integers too large for a float, unknown or
+            missing keys, bad numbers — the message starts with the file and names the key.
         """
         path = Path(path)
         data = _read_yaml(path, "ontology")
@@ -299,16 +302,9 @@ class Ontology:
 
 
 def _read_yaml(path: Path, what: str):
-    """The parsed YAML document of an ontology file; every failure a ValueError naming the file."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
-        raise ValueError(f"cannot read {what} file {path}: {reason}") from None
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ValueError(f"malformed YAML in {what} file {path}: {' '.join(str(exc).split())}") from None
+    """The parsed YAML document of an ontology file, by the project's safe loader (:mod:`psgsl_pgm._yaml`):
+    duplicate keys, huge integers, non-UTF-8 bytes and malformed YAML are ValueErrors naming the file."""
+    return load_yaml(path)
 
 
 # ------------------------------------------------------------------------------------------------ helpers

@@ -6,9 +6,9 @@ from functools import lru_cache
 from importlib import resources
 
 import numpy as np
-import yaml
 
 from .._ontology import Ontology
+from .._yaml import load_yaml
 
 __all__ = ["house_ontology"]
 
@@ -32,10 +32,10 @@ def _cached(seeds: tuple, pseudo_count: float) -> Ontology:
     room_table = (counts + pseudo_count) / (counts + pseudo_count).sum(axis=1, keepdims=True)  # p(o | room)
     class_prior = (counts.sum(axis=0) + pseudo_count) / (counts.sum() + k * pseudo_count)  # β = p(o | ¬s) ≈ p(o)
     # p(o | s, γ) from the hand-written table, read by the Ontology's own reader (a typo names the file and key)
-    path = resources.files("psgsl_pgm").joinpath("data/house_gases.yaml")
-    text = path.read_text(encoding="utf-8")
+    with resources.as_file(resources.files("psgsl_pgm") / "data" / "house_gases.yaml") as path:
+        gases = load_yaml(path)  # the project's safe loader: a duplicated class names file, key and line
     try:
-        hand = Ontology.from_dict({"classes": list(classes), "gases": yaml.safe_load(text)})
+        hand = Ontology.from_dict({"classes": list(classes), "gases": gases})
     except (ValueError, TypeError) as exc:
         raise type(exc)(f"{path}: {exc}") from None
     table, gases = hand.source_table, hand.gases

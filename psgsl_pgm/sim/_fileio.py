@@ -9,7 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import yaml
+
+from .._yaml import load_yaml_mapping
 
 from .._validate import file_field
 
@@ -17,17 +18,8 @@ __all__ = ["read_yaml_mapping", "check_keys", "number", "number_list", "read_gre
 
 
 def read_yaml_mapping(path) -> tuple[Path, dict]:
-    """Read a YAML file whose top level must be a mapping."""
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"{p}: no such file")
-    try:
-        data = yaml.safe_load(p.read_text())
-    except yaml.YAMLError as err:
-        raise ValueError(f"{p}: not valid YAML ({err})") from None
-    if not isinstance(data, dict):
-        raise ValueError(f"{p}: expected a YAML mapping at the top level, got {type(data).__name__}")
-    return p, data
+    """Read a YAML file whose top level must be a mapping (the project's safe loader, :mod:`psgsl_pgm._yaml`)."""
+    return load_yaml_mapping(path)
 
 
 def check_keys(where: str, data: dict, *, required=(), optional=()) -> None:
