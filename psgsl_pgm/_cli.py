@@ -1,8 +1,13 @@
 """Command line: ``psgsl`` (or ``python -m psgsl_pgm``).
 
 ``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``, ``world check``,
-``export-networks`` (each further subcommand registered from its own ``_cli_<name>`` module). Usage errors and
-bad input files give a one-line message and exit code 2, never a traceback.
+``export-networks`` (each further subcommand registered from its own ``_cli_<name>`` module).
+
+Errors (README "Bad input"): every :class:`ValueError`, :class:`TypeError` and :class:`OSError` (so also
+:class:`FileNotFoundError`) that a command raises — bad arguments, bad input files, an unwritable output — is
+printed by :func:`main` as ONE line ``psgsl <command>: error: <message>`` on stderr, and the exit code is 2;
+never a traceback. Output paths are checked before any work starts (:mod:`psgsl_pgm._output`). Subcommand
+modules therefore just raise ValueError/TypeError with a clear message.
 """
 
 from __future__ import annotations
@@ -14,11 +19,15 @@ from pathlib import Path
 
 from . import _cli_export
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "error_line", "main"]
 
 
-class _UsageError(Exception):
+class _UsageError(ValueError):
     """A bad argument or input file: reported in one line, exit code 2."""
+
+
+#: What :func:`main` reports as one line + exit code 2 (anything else is a bug and keeps its traceback).
+_INPUT_ERRORS = (ValueError, TypeError, OSError)
 
 
 def _kitchen(args) -> int:
@@ -37,8 +46,10 @@ def _kitchen(args) -> int:
 def _demo(args) -> int:
     from ._cli_grid import interrupted
     from ._grid_runner import GridInterrupted
+    from ._output import prepare_output_dir
     from .experiment import DEMO_SEEDS, format_table, run_demo
 
+    prepare_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
     seeds = range(args.seeds) if args.seeds is not None else DEMO_SEEDS
     print(f"psgsl demo: smoke from the kitchen oven of the simulated house, {len(seeds)} seeds, "
           f"{args.workers} workers -> {args.out}", flush=True)
@@ -55,27 +66,28 @@ def _demo(args) -> int:
 def _experiment(args) -> int:
     from ._cli_grid import interrupted
     from ._grid_runner import GridInterrupted
-    from .experiment import ExperimentConfig, format_table, parse_source, run_experiment
+    from ._output import prepare_output_dir
+    from .experiment import ExperimentConfig, check_sources, format_table, parse_source, run_experiment
 
-    try:
-        spec = None
-        if args.world is not None:
-            from .sim import load_world
+    spec = None
+    if args.world is not None:
+        from .sim import load_world
 
-            spec = load_world(args.world)
-        names = args.sources
-        if names is None:
-            names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
-            if not names:
-                raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
-        sources = [parse_source(s) for s in names]
-        gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
-        config = ExperimentConfig(stops=args.stops, **gas)
-        if spec is not None:
-            for s in sources:  # every source must exist in this world before any run starts
-                spec.resolve_source(s, spec.house(0))
-    except (ValueError, TypeError, FileNotFoundError) as exc:
-        raise _UsageError(str(exc)) from None
+        spec = load_world(args.world)
+    names = args.sources
+    if names is None:
+        names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
+        if not names:
+            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+    sources = [parse_source(s) for s in names]
+    gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
+    config = ExperimentConfig(stops=args.stops, **gas)
+    if spec is not None:
+        for s in sources:  # every source must exist in this world before any run starts
+            spec.resolve_source(s, spec.house(0))
+    else:
+        check_sources(sources, seeds=range(args.seeds))  # unknown class, off the map: refused before any run
+    prepare_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
     where = "the embedded house" if spec is None else args.world
     print(f"psgsl experiment: {where}, sources {', '.join(map(str, names))}, {args.seeds} seeds, gas "
           f"{config.gas!r} -> {args.out}", flush=True)
@@ -85,8 +97,6 @@ def _experiment(args) -> int:
                                    world=args.world)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=os.path.join(args.out, "runs"))
-    except (ValueError, TypeError) as exc:  # e.g. stored runs of another configuration, an unreachable scheduler
-        raise _UsageError(str(exc)) from None
     for key, summary in summaries.items():
         print(format_table(summary, title=key))
         print()
@@ -112,17 +122,12 @@ def _load_array(path, name):
 
 
 def _estimate(args) -> int:
-    try:
-        return _estimate_checked(args)
-    except (ValueError, TypeError) as exc:  # the library's messages name what was expected and what arrived
-        raise _UsageError(str(exc)) from None
-
-
-def _estimate_checked(args) -> int:
     import numpy as np
 
     from . import Ontology, fuse, semantic_source_probability
+    from ._output import check_output_file, write_file_atomically
 
+    out = check_output_file(args.out)  # before reading anything: a directory, a device or no folder is refused
     try:
         ontology = Ontology.from_yaml(args.ontology)
     except FileNotFoundError:
@@ -148,11 +153,7 @@ def _estimate_checked(args) -> int:
     semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
                                            column_axis=2 if voxels else None)  # voxel columns -> cells
     posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
-    out = os.fspath(args.out)
-    try:
-        np.save(out, posterior)
-    except OSError as exc:
-        raise _UsageError(f"--out: cannot write {out!r} ({exc.strerror})") from None
+    write_file_atomically(out, lambda fh: np.save(fh, posterior))  # exactly at --out: no ".npy" appended
     best = np.unravel_index(int(np.argmax(posterior)), posterior.shape)
     print(f"p(s | g, z) for {gas!r} over {posterior.size} cells -> {out}; most probable cell {tuple(map(int, best))} "
           f"(p = {posterior[best]:.4g})")
@@ -230,7 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "(default: the map's)")
     est.add_argument("--olfactory", required=True, help=".npy (...): p(s | g) per cell")
     est.add_argument("--gas", default=None, help="gas name (default: the ontology's only gas)")
-    est.add_argument("--out", required=True, help=".npy to write p(s | g, z) to")
+    est.add_argument("--out", required=True, help="file to write p(s | g, z) to, in .npy format, at exactly this path")
     est.set_defaults(func=_estimate)
 
     kitchen = sub.add_parser("kitchen", help="the paper's kitchen ontology on six illustrative cells")
@@ -251,10 +252,26 @@ def main(argv=None) -> int:
     args.argv = argv  # for the resume hint after Ctrl-C
     try:
         return args.func(args)
-    except _UsageError as exc:
-        message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        print(f"psgsl {args.command}: error: {message}", file=sys.stderr)
+    except _INPUT_ERRORS as exc:
+        print(f"psgsl {args.command}: error: {error_line(exc)}", file=sys.stderr)
         return 2
+
+
+def error_line(exc: BaseException) -> str:
+    """One line for an error: its message with line breaks folded (numpy arrays in messages span lines).
+
+    An :class:`OSError` without a message of its own is told by its file name and reason.
+
+    >>> error_line(ValueError("x must be positive,\\n got [[1]\\n [2]]"))
+    'x must be positive, got [[1] [2]]'
+    >>> error_line(FileNotFoundError(2, "No such file or directory", "a.npy"))
+    "'a.npy': No such file or directory"
+    """
+    if isinstance(exc, OSError) and exc.strerror and not (exc.args and len(exc.args) == 1):
+        target = f"{exc.filename!r}: " if exc.filename is not None else ""
+        return f"{target}{exc.strerror}"
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -19,6 +19,7 @@ from ._figures import plot_error_chart, plot_progression, plot_room_types
 from ._metrics import error_and_spread, mean_ci
 from ._ontology import house_ontology
 from ._run import RunResult, run_search
+from ._sources import check_sources
 from ._store import load_run, save_run
 from ._summary import format_table, summarize
 from ._tour import Tour, exploration_tour
@@ -32,6 +33,7 @@ __all__ = [
     "Tour",
     "VARIANTS",
     "calibrate_encounter_scale",
+    "check_sources",
     "error_and_spread",
     "exploration_tour",
     "format_table",

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -38,13 +40,25 @@ def save_run(result: RunResult, path) -> Path:
 
 
 def load_run(path) -> RunResult:
-    """Read a run written by :func:`save_run` (ValueError naming the file if it is not one)."""
+    """Read a run written by :func:`save_run`.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        The file is not a run file written by :func:`save_run` — truncated, corrupt, another archive, missing
+        fields — naming the file.
+    """
     path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such run file")
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:  # our handle: closed even on a bad zip
             steps = z["snapshot_steps"]
             snaps = {int(s): z["snapshots"][i] for i, s in enumerate(steps)}
             return RunResult(str(z["source"]), int(z["seed"]), str(z["estimator"]), z["source_xy"], z["time"],
                              z["position"], z["hit"], z["error"], z["spread"], snaps, json.loads(str(z["config"])))
-    except (OSError, KeyError, ValueError, EOFError) as exc:
-        raise ValueError(f"{path} is not a run file written by psgsl ({exc})") from None
+    except (OSError, KeyError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(f"{path} is not a run file written by psgsl ({reason}); delete it to recompute the run") from None

@@ -154,7 +154,7 @@ class FilamentModel:
             raise ValueError(f"source must be a finite (x, y) point, got {source!r}")
         self.source = src[:2].copy()
         if grid.is_occupied(self.source):
-            raise ValueError(f"source {tuple(self.source)} lies in an occupied cell or outside the map")
+            raise ValueError(f"source ({self.source[0]:g}, {self.source[1]:g}) lies in an occupied cell or outside the map")
         if outlet is None:
             outlet = np.zeros(grid.shape, bool)
         outlet = np.asarray(outlet, dtype=bool)

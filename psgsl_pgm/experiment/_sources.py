@@ -1,0 +1,64 @@
+"""Checking source specifications against the house before any run starts (``psgsl experiment``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._config import parse_source
+
+__all__ = ["check_sources"]
+
+
+def check_sources(sources, *, seeds=(0,), house=None) -> list:
+    """Refuse, before any search runs, a source the house cannot hold.
+
+    A class name must have an object in the house; a position ``(x, y)`` must lie inside the map and in a
+    free cell — in the house of *every* seed, since the furniture moves between seeds (an error that would
+    otherwise surface in a worker, hours into a grid).
+
+    Parameters
+    ----------
+    sources : sequence
+        Source specifications (see :func:`parse_source`).
+    seeds : iterable of int, keyword-only
+        The seeds whose houses are checked (``default_house(seed)``); ignored when ``house`` is given.
+    house : psgsl_pgm.sim.House, optional, keyword-only
+        One house to check against instead.
+
+    Returns
+    -------
+    list
+        The parsed specifications.
+
+    Raises
+    ------
+    ValueError
+        An unknown class (naming the classes present) or a position outside the map or in an occupied cell
+        (naming the map's extent).
+    """
+    from ..sim import default_house
+
+    specs = [parse_source(s) for s in sources]
+    houses = [house] if house is not None else [default_house(int(s)) for s in dict.fromkeys(seeds)]
+    for spec in specs:
+        for h in houses:
+            _check(spec, h)
+    return specs
+
+
+def _check(spec, house) -> None:
+    if isinstance(spec, str):
+        if not house.objects_of_class(spec):
+            present = sorted({o.class_name for o in house.objects})
+            raise ValueError(f"source {spec!r} is no object class of the house; classes present: {present}")
+        return
+    grid = house.grid
+    x, y = spec
+    cell = grid.world_to_cell(np.array([x, y]))
+    if not grid.contains(cell):
+        x0, x1, y0, y1 = (float(v) for v in grid.extent)
+        raise ValueError(f"source position ({x:g}, {y:g}) lies outside the map: x in [{x0:g}, {x1:g}], "
+                         f"y in [{y0:g}, {y1:g}] metres")
+    if grid.is_occupied(np.array([x, y])):
+        raise ValueError(f"source position ({x:g}, {y:g}) lies in an occupied cell of the map (a wall); give a "
+                         "position in free space")
