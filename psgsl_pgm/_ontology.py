@@ -274,8 +274,8 @@ class Ontology:
         class_prior, rooms
             As for :meth:`from_dict` (mappings by name).
         """
-        alpha = float(concentration)
-        if not np.isfinite(alpha) or alpha < 0:
+        alpha = _number(concentration, "concentration")
+        if alpha < 0:
             raise ValueError(f"concentration must be a finite number >= 0, got {concentration!r}")
         names = _names(classes, "classes")
         if OTHER not in names:
@@ -335,7 +335,10 @@ def _mapping(value, what) -> dict:
 def _number(value, what) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{what} must be a number, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond ±1.8e308
+        raise ValueError(f"{what} must be finite, got an integer of {value.bit_length()} bits, too large for a float") from None
     if not np.isfinite(v):
         raise ValueError(f"{what} must be finite, got {value!r}")
     return v

@@ -12,6 +12,8 @@ The generative model (the paper's Network A, Sec. "Model"; Sec. "Probabilistic G
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.special import logsumexp
 
@@ -21,7 +23,12 @@ from .._semantic import semantic_source_probability
 from .._validate import as_float_array, check_nonnegative, check_sums, index as as_index
 from ._names import check_identifier
 
-__all__ = ["SemanticGSLProblem"]
+__all__ = ["MAX_CELLS", "SemanticGSLProblem"]
+
+#: Largest number of cells n a problem may have: 2 000 000 (a 1414 × 1414 grid). The problem holds (n, k)
+#: arrays and n cell names; beyond this size guard, ``cells=10**9`` would run for ever building the names.
+#: (The exact networks are far smaller in practice: their inference is exponential in what they couple.)
+MAX_CELLS = 2_000_000
 
 def _array(x, name: str, ndim: int, *, keep_float32: bool = False) -> np.ndarray:
     """Validated real array (the shared vocabulary's type contract) with ``ndim`` dimensions, finite and
@@ -47,6 +54,8 @@ def _names(names, count: int, prefix: str, what: str) -> tuple[str, ...]:
     if names is None:
         width = len(str(count - 1))
         return tuple(f"{prefix}{i:0{width}d}" for i in range(count))
+    if isinstance(names, (str, bytes, dict)) or not hasattr(names, "__iter__"):
+        raise TypeError(f"{what}s must be a sequence of {count} names, got {type(names).__name__} {names!r}")
     names = tuple(check_identifier(name, what) for name in names)
     if len(names) != count:
         raise ValueError(f"expected {count} {what}s, got {len(names)}: {names}")
@@ -126,8 +135,10 @@ class SemanticGSLProblem:
         lik = _array(source_likelihood, "source_likelihood", np.ndim(source_likelihood), keep_float32=True)
         if lik.ndim == 1:
             lik = lik[None, :]
-        if lik.ndim != 2 or lik.shape[1] < 2:
-            raise ValueError(f"source_likelihood must be (k,) or (m, k) with k >= 2, got shape {lik.shape}")
+        if lik.ndim != 2 or lik.shape[1] < 2 or lik.shape[0] < 1:
+            raise ValueError(
+                f"source_likelihood must be (k,) or (m, k) with m >= 1 gases and k >= 2 classes, got shape {lik.shape}"
+            )
         self.source_likelihood = _distribution(lik, "source_likelihood")  # p(o | s, γ), (m, k)
         m, k = lik.shape
         beta = _array(background, "background", 1, keep_float32=True)
@@ -138,12 +149,17 @@ class SemanticGSLProblem:
         self.background = _distribution(beta, "background")  # β = p(o | ¬s), (k,)
 
         if isinstance(cells, (int, np.integer)) and not isinstance(cells, bool):
-            if cells < 1:
-                raise ValueError(f"cells must be a positive count, got {cells}")
+            if not 1 <= cells <= MAX_CELLS:
+                shown = cells if abs(cells) < 10**24 else f"an integer of {int(cells).bit_length()} bits"
+                raise ValueError(f"cells must be a count in [1, {MAX_CELLS}] (the size guard MAX_CELLS), got {shown}")
             n, cell_names = int(cells), None
         elif isinstance(cells, str):
             raise TypeError(f"cells must be an int or a sequence of names, got the str {cells!r}")
         else:
+            if not hasattr(cells, "__len__") or isinstance(cells, (dict, bytes)):
+                raise TypeError(f"cells must be an int or a sequence of names, got {type(cells).__name__}")
+            if len(cells) > MAX_CELLS:
+                raise ValueError(f"cells must name at most {MAX_CELLS} cells (the size guard MAX_CELLS), got {len(cells)}")
             cell_names = tuple(cells)
             n = len(cell_names)
             if n < 1:
@@ -155,7 +171,7 @@ class SemanticGSLProblem:
             if isinstance(shape, (str, bytes)) or np.ndim(shape) != 1:
                 raise TypeError(f"shape must be a tuple of ints, got {type(shape).__name__} {shape!r}")
             shape = tuple(as_index(s, "shape entries", minimum=1) for s in shape)
-            if int(np.prod(shape)) != n:
+            if math.prod(shape) != n:  # exact, no int64 overflow
                 raise ValueError(f"shape {shape} must have positive sides whose product is n = {n}")
         self.shape = shape
 

@@ -10,11 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import file_field
 from .._yaml import load_yaml_mapping
 
-from .._validate import file_field
-
-__all__ = ["read_yaml_mapping", "check_keys", "number", "number_list", "read_grey_image", "resolve"]
+__all__ = ["MAX_IMAGE_PIXELS", "read_yaml_mapping", "check_keys", "number", "number_list", "read_grey_image", "resolve"]
 
 
 def read_yaml_mapping(path) -> tuple[Path, dict]:
@@ -58,21 +57,62 @@ def resolve(yaml_path: Path, name, field: str) -> Path:
     return p if p.is_absolute() else yaml_path.parent / p
 
 
+#: Largest image a loader reads, pixels (50 million, e.g. 7000 × 7000: a 350 m square house at 5 cm per cell).
+#: Checked on the header, before any pixel is decoded, so a "decompression bomb" header costs nothing.
+MAX_IMAGE_PIXELS = 50_000_000
+
+
 def read_grey_image(path: Path, *, where: str, field: str) -> np.ndarray:
-    """(rows, cols) uint8 grey levels of an image file, image row 0 = top (as stored)."""
+    """(rows, cols) uint8 grey levels of an image file, image row 0 = top (as stored).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        Not an image, truncated (shorter than its header says, or a PNG without its end), more than
+        :data:`MAX_IMAGE_PIXELS` pixels, an empty image or a 16-bit / float mode — naming ``where``, ``field``
+        and the image.
+    """
+    import warnings
+
     from PIL import Image, UnidentifiedImageError
 
     if not path.is_file():
+        if path.exists():
+            raise ValueError(f"{where}: field '{field}' names {path}, which is not a file")
         raise FileNotFoundError(f"{where}: field '{field}' names image {path}, which does not exist")
+    at = f"{where}: field '{field}': image {path}"
     try:
-        with Image.open(path) as im:
-            if im.mode in ("L", "1", "P"):
-                im = im.convert("L")
-            elif im.mode in ("I;16", "I;16B", "I", "F"):
-                raise ValueError(f"{where}: field '{field}': image {path} has mode {im.mode}; expected 8-bit")
-            else:  # colour: map_server averages the channels
-                arr = np.asarray(im.convert("RGB"), dtype=np.float64).mean(axis=-1)
+        with warnings.catch_warnings():  # our own limit below replaces PIL's warning (an error under pytest)
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as im:
+                w, h = im.size
+                _check_pixels(w, h, at)
+                if im.format == "PNG":
+                    im.verify()  # chunk CRCs and the final IEND: a cut PNG is refused even if its pixels decode
+            with Image.open(path) as im:
+                if im.mode in ("L", "1", "P"):
+                    return np.asarray(im.convert("L"), dtype=np.uint8).copy()
+                if im.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
+                    raise ValueError(f"{at} has mode {im.mode}; expected an 8-bit image")
+                arr = np.asarray(im.convert("RGB"), dtype=np.float64).mean(axis=-1)  # map_server averages channels
                 return np.rint(arr).astype(np.uint8)
-            return np.asarray(im, dtype=np.uint8).copy()
+    except Image.DecompressionBombError:
+        raise ValueError(f"{at} has more pixels than the {MAX_IMAGE_PIXELS} pixels an image may have") from None
     except UnidentifiedImageError:
-        raise ValueError(f"{where}: field '{field}': {path} is not a readable image") from None
+        raise ValueError(f"{at} is not a readable image") from None
+    except (OSError, SyntaxError, EOFError) as exc:  # PIL: truncated data, bad header, bad chunk (SyntaxError)
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(f"{at} is truncated or corrupt ({reason})") from None
+    except ValueError as exc:
+        if str(exc).startswith(where):
+            raise
+        raise ValueError(f"{at} is not a readable image ({' '.join(str(exc).split())})") from None
+
+
+def _check_pixels(w: int, h: int, at: str) -> None:
+    if w < 1 or h < 1:
+        raise ValueError(f"{at} is empty ({w} x {h} pixels)")
+    if w * h > MAX_IMAGE_PIXELS:
+        raise ValueError(f"{at} is {w} x {h} = {w * h} pixels, more than the {MAX_IMAGE_PIXELS} pixels an image may have")

@@ -125,16 +125,26 @@ def load_objects(yaml_path, *, like: GridMap | None = None, classes=None) -> lis
 
     Raises
     ------
+    FileNotFoundError
+        No such file.
+    TypeError
+        ``like`` is not a GridMap, ``classes`` is not a list of names.
     ValueError
         Unknown keys, non-numeric values, unknown classes, objects outside the map — naming the file and field.
     """
+    if like is not None and not isinstance(like, GridMap):
+        raise TypeError(f"like must be a GridMap (or None), got {type(like).__name__} {like!r}")
+    if classes is not None and (isinstance(classes, (str, bytes, dict)) or not hasattr(classes, "__iter__")):
+        raise TypeError(f"classes must be a list of class names, got {type(classes).__name__} {classes!r}")
     path, data = read_yaml_mapping(yaml_path)
     where = str(path)
     check_keys(where, data, required=("objects",))
     items = data["objects"]
     if not isinstance(items, list):
         raise ValueError(f"{where}: field 'objects' must be a list, got {type(items).__name__}")
-    allowed = None if classes is None else {str(c) for c in classes}
+    allowed = None if classes is None else set(classes)
+    if allowed is not None and not all(isinstance(c, str) for c in allowed):
+        raise TypeError(f"classes must hold class names (str), got {sorted(map(repr, allowed))}")
     cell = like.resolution if like is not None else 0.1
     out = []
     for i, it in enumerate(items):

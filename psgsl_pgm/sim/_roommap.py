@@ -119,12 +119,17 @@ def _load_segmented(path: Path, data: dict, like: GridMap):
     background = data.get("background", [0])
     if not isinstance(background, list):
         background = [background]
-    bg = {int(number(where, "background", v, integer=True, nonnegative=True)) for v in background}
+    bg = set()
+    for i, v in enumerate(background):
+        lv = number(where, f"background[{i}]", v, integer=True, nonnegative=True)
+        if lv > 255:
+            raise ValueError(f"{where}: field 'background[{i}]': grey level must lie in [0, 255], got {v!r}")
+        bg.add(int(lv))
     table: dict[int, str] = {}
     for level, name in rooms.items():
         lv = number(where, f"rooms.{level}", level, integer=True, nonnegative=True)
         if lv > 255:
-            raise ValueError(f"{where}: field 'rooms.{level}': grey level must lie in [0, 255]")
+            raise ValueError(f"{where}: field 'rooms.{level}': grey level must lie in [0, 255], got {level!r}")
         if not isinstance(name, str) or not name:
             raise ValueError(f"{where}: field 'rooms.{level}' must be a room name, got {name!r}")
         if int(lv) in bg:
