@@ -132,6 +132,8 @@ def _estimate(args) -> int:
         ontology = Ontology.from_yaml(args.ontology)
     except FileNotFoundError:
         raise _UsageError(f"--ontology: no such file {args.ontology!r}") from None
+    except (ValueError, TypeError) as exc:  # the message starts with the file name
+        raise type(exc)(f"--ontology: {exc}") from None
     if Path(args.class_probs).suffix.lower() in (".npz", ".json"):
         class_probs = _read_beliefs(args, ontology)
     else:
