@@ -64,28 +64,34 @@ def read_gaden_wind_csv(path, *, like: GridMap, height: float, slab: float | Non
     max_distance = 2 * like.resolution if max_distance is None else float(max_distance)
     if not (slab > 0 and max_distance > 0):
         raise ValueError(f"slab and max_distance must be positive, got {slab!r}, {max_distance!r}")
-    with p.open(newline="") as fh:
-        reader = csv.reader(fh)
-        try:
-            raw = next(reader)
-            header = [_column(h) for h in raw]
-        except StopIteration:
-            raise ValueError(f"{p}: empty file, expected a header with columns {list(_COLUMNS)}") from None
-        missing = [c for c in _COLUMNS if c not in header]
-        if missing:
-            raise ValueError(f"{p}: missing column(s) {missing}; the header has {header}")
-        cols = [header.index(c) for c in _COLUMNS]
-        rows = []
-        for line, row in enumerate(reader, start=2):
-            if not row or all(not x.strip() for x in row):
-                continue
+    try:
+        with p.open(newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
             try:
-                rows.append([float(row[i]) for i in cols])
-            except IndexError:
-                raise ValueError(f"{p}: line {line} has {len(row)} fields, expected {len(header)}") from None
-            except ValueError:
-                bad = next(c for c, i in zip(_COLUMNS, cols) if not _is_float(row[i]))
-                raise ValueError(f"{p}: line {line}, column '{bad}': not a number: {row[header.index(bad)]!r}") from None
+                raw = next(reader)
+                header = [_column(h) for h in raw]
+            except StopIteration:
+                raise ValueError(f"{p}: empty file, expected a header with columns {list(_COLUMNS)}") from None
+            missing = [c for c in _COLUMNS if c not in header]
+            if missing:
+                raise ValueError(f"{p}: missing column(s) {missing}; the header has {header}")
+            cols = [header.index(c) for c in _COLUMNS]
+            rows = []
+            for line, row in enumerate(reader, start=2):
+                if not row or all(not x.strip() for x in row):
+                    continue
+                try:
+                    rows.append([float(row[i]) for i in cols])
+                except IndexError:
+                    raise ValueError(f"{p}: line {line} has {len(row)} fields, expected {len(header)}") from None
+                except ValueError:
+                    bad = next(c for c, i in zip(_COLUMNS, cols) if not _is_float(row[i]))
+                    raise ValueError(f"{p}: line {line}, column '{bad}': not a number: {row[header.index(bad)]!r}") from None
+    except UnicodeDecodeError as exc:  # a ValueError subclass: before the loop's own ValueError handling
+        raise ValueError(f"{p}: not UTF-8 text: it holds the byte 0x{exc.object[exc.start]:02x}, which cannot be "
+                         "decoded; save the file as UTF-8") from None
+    except csv.Error as exc:
+        raise ValueError(f"{p}: not a valid CSV file ({exc})") from None
     if len(set(header)) != len(header):
         dup = sorted({h for h in header if header.count(h) > 1} & set(_COLUMNS))
         if dup:
