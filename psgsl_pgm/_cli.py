@@ -118,6 +118,8 @@ def _load_array(path, name):
         raise _UsageError(f"{name}: {path!r} is not a .npy array ({exc})") from None
     if not isinstance(arr, np.ndarray):
         raise _UsageError(f"{name}: expected one array in a .npy file, got an archive in {path!r}")
+    if arr.dtype.kind not in "fiu":  # the type contract: real numbers only (no bool, complex, text, dates)
+        raise TypeError(f"{name}: expected an array of real numbers in {path!r}, got dtype {arr.dtype}")
     return arr
 
 
@@ -126,6 +128,7 @@ def _estimate(args) -> int:
 
     from . import Ontology, fuse, semantic_source_probability
     from ._output import check_output_file, write_file_atomically
+    from ._validate import as_float_array, check_distribution, check_nonnegative
 
     out = check_output_file(args.out)  # before reading anything: a directory, a device or no folder is refused
     try:
@@ -152,6 +155,8 @@ def _estimate(args) -> int:
     cells = class_probs.shape[:2] if voxels else class_probs.shape[:-1]
     if olfactory.shape != cells:
         raise _UsageError(f"--olfactory must have the map's shape {cells}, got {olfactory.shape}")
+    check_distribution(as_float_array(class_probs, "--class-probs"), "--class-probs (p(o_c | z_c) per cell)")
+    check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
     semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
                                            column_axis=2 if voxels else None)  # voxel columns -> cells
     posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
@@ -179,14 +184,29 @@ def _read_beliefs(args, ontology):
     return read_class_beliefs(args.class_probs, ontology.classes, grid=grid, class_prior=ontology.class_prior)
 
 
-def _positive_int(text):
+#: Size guards of the command line: more seeds than this is years of runs, more workers than this no machine has.
+MAX_SEEDS = 10_000
+MAX_WORKERS = 1024
+
+
+def _positive_int(text, maximum=None):
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    if maximum is not None and value > maximum:
+        raise argparse.ArgumentTypeError(f"expected a positive integer of at most {maximum}, got {text!r}")
     return value
+
+
+def _seeds(text):
+    return _positive_int(text, MAX_SEEDS)
+
+
+def _workers(text):
+    return _positive_int(text, MAX_WORKERS)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -201,8 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo = sub.add_parser("demo", help="the validation experiment in small (≈ 15 s on 2 cores)")
     demo.add_argument("--out", default="psgsl-demo", help="output directory (default: %(default)s)")
-    demo.add_argument("--seeds", type=_positive_int, default=None, help="number of seeds (default: 4)")
-    demo.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    demo.add_argument("--seeds", type=_seeds, default=None, help=f"number of seeds, at most {MAX_SEEDS} (default: 4)")
+    demo.add_argument("--workers", type=_workers, default=workers,
+                      help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
     demo.set_defaults(func=_demo)
 
@@ -212,10 +233,11 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--sources", nargs="+", default=None,
                      help="object class names, 'x,y' positions or the world file's source names (default: the "
                      "world's sources; for the embedded house oven bed 5.0,6.0)")
-    exp.add_argument("--seeds", type=_positive_int, default=10, help="seeds 0..N-1 (default: %(default)s)")
+    exp.add_argument("--seeds", type=_seeds, default=10, help=f"seeds 0..N-1, N at most {MAX_SEEDS} (default: %(default)s)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
-    exp.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    exp.add_argument("--workers", type=_workers, default=workers,
+                     help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)
     exp.add_argument("--stops", type=_positive_int, default=None,

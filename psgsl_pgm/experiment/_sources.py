@@ -13,15 +13,16 @@ def check_sources(sources, *, seeds=(0,), house=None) -> list:
     """Refuse, before any search runs, a source the house cannot hold.
 
     A class name must have an object in the house; a position ``(x, y)`` must lie inside the map and in a
-    free cell — in the house of *every* seed, since the furniture moves between seeds (an error that would
-    otherwise surface in a worker, hours into a grid).
+    free cell (an error that would otherwise surface in a worker, hours into a grid). The built-in house has
+    the same walls and object classes for every seed (only the furniture moves), so the house of the first
+    seed is checked.
 
     Parameters
     ----------
     sources : sequence
         Source specifications (see :func:`parse_source`).
     seeds : iterable of int, keyword-only
-        The seeds whose houses are checked (``default_house(seed)``); ignored when ``house`` is given.
+        The seeds of the grid; ``default_house`` of the first is checked. Ignored when ``house`` is given.
     house : psgsl_pgm.sim.House, optional, keyword-only
         One house to check against instead.
 
@@ -39,10 +40,13 @@ def check_sources(sources, *, seeds=(0,), house=None) -> list:
     from ..sim import default_house
 
     specs = [parse_source(s) for s in sources]
-    houses = [house] if house is not None else [default_house(int(s)) for s in dict.fromkeys(seeds)]
+    if house is None:
+        first = next(iter(seeds), None)
+        if first is None:
+            raise ValueError("seeds must hold at least one seed")
+        house = default_house(int(first))
     for spec in specs:
-        for h in houses:
-            _check(spec, h)
+        _check(spec, house)
     return specs
 
 
