@@ -151,7 +151,7 @@ class SemanticGSLProblem:
         if isinstance(cells, (int, np.integer)) and not isinstance(cells, bool):
             if not 1 <= cells <= MAX_CELLS:
                 shown = cells if abs(cells) < 10**24 else f"an integer of {int(cells).bit_length()} bits"
-                raise ValueError(f"cells must be a count in [1, {MAX_CELLS}] (the size guard MAX_CELLS), got {shown}")
+                raise ValueError(f"cells must be a positive count of at most {MAX_CELLS} (the size guard MAX_CELLS), got {shown}")
             n, cell_names = int(cells), None
         elif isinstance(cells, str):
             raise TypeError(f"cells must be an int or a sequence of names, got the str {cells!r}")
