@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
-from ._validate import as_float_array, check_distribution, check_last_axis, check_nonnegative, describe
+from ._validate import as_array, as_float_array, check_distribution, check_last_axis, check_nonnegative, describe
 
 __all__ = ["update_class_probs", "room_evidence"]
 
@@ -50,8 +50,8 @@ def update_class_probs(class_probs, likelihood):
     q = as_float_array(class_probs, "class_probs", min_ndim=1)
     lik = as_float_array(likelihood, "likelihood", min_ndim=1)
     k = q.shape[-1]
+    check_distribution(q, "class_probs")  # first: an empty class axis is class_probs' fault, not likelihood's
     check_last_axis(lik, "likelihood", k)
-    check_distribution(q, "class_probs")
     check_nonnegative(lik, "likelihood")
     try:
         shape = np.broadcast_shapes(q.shape, lik.shape)
@@ -119,7 +119,7 @@ def room_evidence(room_labels, room_class_table, class_prior):
     array([[0.3, 0.7],
            [0.1, 0.9]])
     """
-    labels = np.asarray(room_labels)
+    labels = as_array(room_labels, "room_labels", "integer room indices (-1 = none)")
     if not np.issubdtype(labels.dtype, np.integer):
         if labels.dtype.kind == "f" and labels.size and np.all(np.isfinite(labels)) and np.all(labels == np.round(labels)):
             labels = labels.astype(np.int64)

@@ -30,6 +30,7 @@ from scipy.special import xlogy
 from ._beliefs_check import check_belief_stats, flat_beliefs
 from ._ratios import class_ratio
 from ._semantic import cell_distribution
+from ._validate import flag
 
 __all__ = ["semantic_information_gain"]
 
@@ -90,6 +91,7 @@ def semantic_information_gain(
     >>> bool(gain[1] > gain[0]), bool(np.isclose(gain[1], gain[2]))   # unseen cells are worth looking at
     (True, True)
     """
+    validate = flag(validate, "validate")
     if predictive not in ("paper", "exact"):
         raise ValueError(f"predictive must be 'paper' or 'exact', got {predictive!r}")
     from ._kernel import ORDER, belief_moments, entropy_terms, gain_from_moments  # compiled on first use

@@ -9,6 +9,7 @@ import numpy as np
 import yaml
 
 from ._validate import SUM_RTOL, as_float_array, check_distribution, describe
+from ._validate import names as _vocab_names
 from ._yaml import load_yaml
 
 __all__ = ["Ontology", "OTHER"]
@@ -309,18 +310,7 @@ def _read_yaml(path: Path, what: str):
 
 # ------------------------------------------------------------------------------------------------ helpers
 def _names(values, what) -> tuple:
-    if isinstance(values, str) or not hasattr(values, "__iter__"):
-        raise TypeError(f"{what} must be a list of names, got {values!r}")
-    names = tuple(values)
-    for v in names:
-        if not isinstance(v, str) or not v.strip():
-            raise TypeError(f"{what} must contain non-empty strings, got {v!r}")
-    if len(set(names)) != len(names):
-        dup = sorted({v for v in names if names.count(v) > 1})
-        raise ValueError(f"{what} has duplicate names {dup}")
-    if not names and what != "rooms":
-        raise ValueError(f"{what} must not be empty")
-    return names
+    return _vocab_names(values, what, allow_empty=(what == "rooms"))  # the shared vocabulary: "ab", dicts, sets refused
 
 
 def _mapping(value, what) -> dict:

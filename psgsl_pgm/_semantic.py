@@ -6,7 +6,7 @@ import numpy as np
 
 from ._beliefs_check import check_belief_stats, flat_beliefs
 from ._ratios import class_ratio
-from ._validate import as_float_array, check_distribution, describe
+from ._validate import as_float_array, check_distribution, describe, flag
 
 __all__ = ["semantic_source_probability", "column_sum", "cell_distribution"]
 
@@ -113,6 +113,7 @@ def semantic_source_probability(
     >>> semantic_source_probability(beliefs, lik, prior).round(4)
     array([0.604, 0.396])
     """
+    normalize, validate = flag(normalize, "normalize"), flag(validate, "validate")
     from ._kernel import belief_weights  # compiled on first use (numba), not at package import
 
     ratio = class_ratio(source_likelihood, class_prior, gas_probs)

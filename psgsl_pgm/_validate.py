@@ -18,8 +18,8 @@ The type contract
 Vocabulary
 ----------
 :func:`real_number`, :func:`positive`, :func:`unit_interval`, :func:`index` (scalars); :func:`real_pair`;
-:func:`flag`; :func:`bool_mask`; :func:`as_float_array`, :func:`check_nonnegative`, :func:`check_last_axis`,
-:func:`check_distribution` / :func:`distribution`, :func:`check_sums` (arrays); :func:`file_field` (a number
+:func:`flag`; :func:`names` (a list of names); :func:`bool_mask`; :func:`as_float_array`, :func:`check_nonnegative`, :func:`check_last_axis`,
+:func:`check_distribution` / :func:`distribution`, :func:`check_sums`, :func:`as_array` (arrays); :func:`file_field` (a number
 read from a file, named by file and field).
 """
 
@@ -32,6 +32,7 @@ import numpy as np
 
 __all__ = [
     "SUM_RTOL",
+    "as_array",
     "as_float_array",
     "bool_mask",
     "check_distribution",
@@ -43,6 +44,7 @@ __all__ = [
     "file_field",
     "flag",
     "index",
+    "names",
     "positive",
     "real_number",
     "real_pair",
@@ -59,6 +61,15 @@ def describe(x) -> str:
     if isinstance(x, np.ndarray):
         return f"ndarray of shape {x.shape} and dtype {x.dtype}"
     return f"{type(x).__name__} {x!r}" if np.ndim(x) == 0 else f"{type(x).__name__} of shape {np.shape(x)}"
+
+
+def as_array(x, name: str, what: str = "an array") -> np.ndarray:
+    """``np.asarray(x)``, with a ragged nested list (or anything numpy cannot make an array of) a
+    :class:`TypeError` naming the argument instead of numpy's "inhomogeneous shape" ValueError."""
+    try:
+        return np.asarray(x)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f"{name} must be {what}, got {type(x).__name__} ({' '.join(str(err).split())})") from None
 
 
 def _real_array(x, name: str, what: str) -> np.ndarray:
@@ -264,6 +275,38 @@ def flag(value, name: str) -> bool:
     return bool(value)
 
 
+def names(values, name: str, *, allow_empty: bool = False, unique: bool = True) -> tuple:
+    """A sequence of non-empty strings as a tuple (a list, tuple or array of str; refused: one str — ``"ab"``
+    is not ``('a', 'b')`` —, bytes, a mapping, a set, a number, non-str entries).
+
+    Examples
+    --------
+    >>> names(["oven", "sink"], "classes")
+    ('oven', 'sink')
+    >>> names("ab", "classes")
+    Traceback (most recent call last):
+    ...
+    TypeError: classes must be a list of names (str), got the str 'ab'
+    """
+    if isinstance(values, (str, bytes)):
+        raise TypeError(f"{name} must be a list of names (str), got the {type(values).__name__} {values!r}")
+    if isinstance(values, (dict, set, frozenset)) or not isinstance(values, (list, tuple, np.ndarray)):
+        import collections.abc as abc
+
+        if isinstance(values, (abc.Mapping, abc.Set)) or not isinstance(values, abc.Sequence):
+            raise TypeError(f"{name} must be a list of names (str), got {type(values).__name__} {values!r}")
+    out = tuple(values.tolist() if isinstance(values, np.ndarray) else values)
+    for v in out:
+        if not isinstance(v, str) or not v.strip():
+            raise TypeError(f"{name} must hold non-empty strings, got {type(v).__name__} {v!r}")
+    if not out and not allow_empty:
+        raise ValueError(f"{name} must not be empty")
+    if unique and len(set(out)) != len(out):
+        dup = sorted({v for v in out if out.count(v) > 1})
+        raise ValueError(f"{name} has duplicate names {dup}")
+    return out
+
+
 def real_pair(value, name: str, what: str = "an (x, y)", unit: str = "metres") -> np.ndarray:
     """A finite pair of real numbers, e.g. a position (x, y) or a wind vector; (2,) float64.
 
@@ -295,7 +338,7 @@ def bool_mask(x, name: str, shape=None, *, ndim: int = 2) -> np.ndarray:
     """
     if x is None or isinstance(x, (str, bytes)):
         raise TypeError(f"{name} must be a boolean array (True/False or 0/1), got {type(x).__name__} {x!r}")
-    arr = np.asarray(x)
+    arr = as_array(x, name, "a boolean array (True/False or 0/1)")
     if arr.dtype != bool:
         if not np.issubdtype(arr.dtype, np.integer) or not np.isin(arr, (0, 1)).all():
             raise TypeError(f"{name} must be a boolean array (True/False or integers 0/1), got {describe(arr)}")

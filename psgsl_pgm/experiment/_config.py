@@ -6,6 +6,8 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
+from .._validate import positive, real_pair
+
 __all__ = ["ESTIMATORS", "ExperimentConfig", "VARIANTS", "parse_source"]
 
 #: The three variants of the paper's Fig. error-chart, in the order they are reported.
@@ -63,11 +65,8 @@ class ExperimentConfig:
         for f in fields(self):
             if f.name in ("gas", "stops"):
                 continue
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not np.isfinite(v):
-                raise ValueError(f"{f.name} must be a finite number, got {v!r}")
-            if v < 0 or (v == 0 and f.name not in _MAY_BE_ZERO):
-                raise ValueError(f"{f.name} must be {'>= 0' if f.name in _MAY_BE_ZERO else '> 0'}, got {v!r}")
+            v = positive(getattr(self, f.name), f.name, allow_zero=f.name in _MAY_BE_ZERO)  # bools, strings refused
+            object.__setattr__(self, f.name, v)
         if not self.tempering <= 1 or not self.false_hit_rate < 1:
             raise ValueError(f"need tempering in (0, 1] and false_hit_rate in [0, 1), got {self.tempering!r}, "
                              f"{self.false_hit_rate!r}")
@@ -105,10 +104,16 @@ def parse_source(spec) -> str | tuple:
             return xy
         if not text:
             raise ValueError("a source must be an object class name or 'x,y', got an empty string")
+        try:
+            float(text)
+        except ValueError:
+            pass
+        else:
+            raise ValueError(f"a source must be an object class name or 'x,y' in metres, got the single number {spec!r}")
         return text
-    xy = np.asarray(spec, dtype=np.float64) if not isinstance(spec, (bytes, dict)) else None
-    if xy is None or xy.shape != (2,) or not np.isfinite(xy).all():
-        raise ValueError(f"a source must be an object class name or an (x, y) position, got {spec!r}")
+    if isinstance(spec, bytes):
+        raise TypeError(f"a source must be an object class name (str) or an (x, y) position, got bytes {spec!r}")
+    xy = real_pair(spec, "source", "an (x, y)", "metres")  # booleans, complex, strings inside: refused
     return (float(xy[0]), float(xy[1]))
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
+from .._validate import as_float_array, describe, real_number, real_pair, unit_interval
+
 __all__ = ["error_and_spread", "mean_ci"]
 
 
@@ -34,14 +36,21 @@ def error_and_spread(posteriors, centres, truth):
     >>> float(e), float(s)
     (0.5, 0.5)
     """
-    p = np.asarray(posteriors, dtype=np.float64)
-    c = np.asarray(centres, dtype=np.float64)
+    p = as_float_array(posteriors, "posteriors", dtype=np.float64, min_ndim=2)
+    c = as_float_array(centres, "centres", dtype=np.float64, ndim=3)
+    if c.shape[-1] != 2 or c.shape[:2] != p.shape[-2:]:
+        raise ValueError(f"centres must be (H, W, 2) cell centres for posteriors over (H, W) = {p.shape[-2:]}, got "
+                         f"{describe(c)}")
+    for what, arr in (("posteriors", p), ("centres", c)):
+        if arr.size == 0 or not np.isfinite(arr).all():
+            raise ValueError(f"{what} must be non-empty and finite, got {describe(arr)}")
+    truth = real_pair(truth, "truth", "an (x, y)", "metres")
     flat = p.reshape(p.shape[:-2] + (-1,))
     xy = c.reshape(-1, 2)
     mean = flat @ xy  # E[s]
     second = flat @ np.einsum("ij,ij->i", xy, xy)  # E‖s‖²
     var = np.maximum(second - np.einsum("...i,...i->...", mean, mean), 0.0)  # trace Cov(s) = E‖s‖² − ‖E[s]‖²
-    error = np.linalg.norm(mean - np.asarray(truth, dtype=np.float64), axis=-1)
+    error = np.linalg.norm(mean - truth, axis=-1)
     return error, np.sqrt(var)
 
 
@@ -65,7 +74,11 @@ def mean_ci(values, *, level: float = 0.95, lower: float | None = None) -> dict:
     >>> [round(x, 3) for x in mean_ci([1.0, 2.0, 3.0], lower=0.0)["ci95"]]
     [0.0, 4.484]
     """
-    v = np.asarray(values, dtype=np.float64)
+    v = as_float_array(values, "values", dtype=np.float64, min_ndim=1)
+    if v.shape[0] == 0 or not np.isfinite(v).all():
+        raise ValueError(f"values must hold at least one run of finite numbers on axis 0, got {describe(v)}")
+    level = unit_interval(level, "level", low_open=True, high_open=True)
+    lower = None if lower is None else real_number(lower, "lower")
     m = v.mean(axis=0)
     n = v.shape[0]
     if n < 2:

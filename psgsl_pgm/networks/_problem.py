@@ -191,7 +191,7 @@ class SemanticGSLProblem:
                 f"cell, one column per class), got {obs.shape}"
             )
         if obs.size and np.any(obs.max(axis=1) <= 0):
-            raise ValueError("every observation likelihood p(z | o) needs a positive entry; got an all-zero row")
+            raise ValueError("observation_likelihoods: every row p(z | o) needs a positive entry; got an all-zero row")
         self.observation_cells = cells_idx.astype(np.intp)
         self.observation_likelihoods = obs
         impossible = np.flatnonzero(~np.isfinite(self.log_class_likelihood().max(axis=1)))
@@ -217,10 +217,13 @@ class SemanticGSLProblem:
         if zeta.shape[1:] != (m,):
             raise ValueError(f"gas_observations must have shape (N_zeta, {m}), got {zeta.shape}")
         if zeta.size and np.any(zeta.max(axis=1) <= 0):
-            raise ValueError("every gas observation p(ζ | γ) needs a positive entry; got an all-zero row")
+            raise ValueError("gas_observations: every row p(ζ | γ) needs a positive entry; got an all-zero row")
         self.gas_observations = zeta
         if not np.isfinite(logsumexp(self.log_joint_weights())):
-            raise ValueError("the evidence has probability zero under this problem (no cell and gas explain it)")
+            raise ValueError(
+                "the evidence has probability zero under this problem: no cell and gas has a positive product of "
+                "source_prior, olfactory_likelihood, gas_prior, gas_observations and observation_likelihoods"
+            )
 
     # ------------------------------------------------------------------ sizes
     @property

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.special import k0
 
 from .._validate import positive as _positive
+from .._validate import real_pair
 
 __all__ = [
     "correlation_length",
@@ -32,10 +33,7 @@ __all__ = [
 
 
 def _wind_vector(wind) -> np.ndarray:
-    w = np.asarray(wind, dtype=np.float64)
-    if w.shape != (2,) or not np.isfinite(w).all():
-        raise ValueError(f"wind must be a finite (u_x, u_y) pair in m/s, got {wind!r}")
-    return w
+    return real_pair(wind, "wind", "a (u_x, u_y)", "m/s")
 
 
 def correlation_length(*, diffusivity: float, lifetime: float, wind_speed: float = 0.0) -> float:
@@ -48,9 +46,7 @@ def correlation_length(*, diffusivity: float, lifetime: float, wind_speed: float
     """
     d = _positive(diffusivity, "diffusivity")
     t = _positive(lifetime, "lifetime")
-    v = float(wind_speed)
-    if not (np.isfinite(v) and v >= 0):
-        raise ValueError(f"wind_speed must be a non-negative finite number, got {wind_speed!r}")
+    v = _positive(wind_speed, "wind_speed", "m/s", allow_zero=True)
     return float(np.sqrt(d * t / (1.0 + v * v * t / (4.0 * d))))
 
 

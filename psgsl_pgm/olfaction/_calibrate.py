@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
+from .._validate import as_array, as_float_array, unit_interval
 from ._plume import PlumeModel
 
 __all__ = ["encounter_scale_mle", "fit_encounter_scale"]
@@ -50,7 +51,7 @@ def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit
     pos = np.asarray(positions, dtype=np.float64)
     if pos.ndim != 2 or pos.shape[1] != 2:
         raise ValueError(f"positions must have shape (n, 2) (x, y in metres), got {pos.shape}")
-    g = np.asarray(hits)
+    g = as_array(hits, "hits", "booleans (or 0/1)")
     if g.dtype != bool and not (np.issubdtype(g.dtype, np.integer) and np.isin(g, (0, 1)).all()):
         raise TypeError(f"hits must be booleans (or 0/1), got dtype {g.dtype}")
     g = g.astype(bool)
@@ -85,24 +86,22 @@ def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> floa
     >>> bool(abs(k - -np.log(0.75)) < 1e-12)          # 1 − exp(−κ) = 1/4: a quarter of the readings hit
     True
     """
-    c = np.asarray(predicted, dtype=np.float64)
+    c = as_float_array(predicted, "predicted", dtype=np.float64)
     if c.ndim != 1 or not np.isfinite(c).all() or (c < 0).any():
         raise ValueError(f"predicted must be a (n,) array of finite non-negative values, got shape {c.shape}")
-    g = np.asarray(hits)
+    g = as_array(hits, "hits", "booleans (or 0/1)")
     if g.dtype != bool and not (np.issubdtype(g.dtype, np.integer) and np.isin(g, (0, 1)).all()):
         raise TypeError(f"hits must be booleans (or 0/1), got dtype {g.dtype}")
     g = g.astype(bool)
     if g.shape != c.shape:
         raise ValueError(f"hits must have shape {c.shape} like predicted, got {g.shape}")
-    eps = float(false_hit_rate)
-    if not 0 <= eps < 1:
-        raise ValueError(f"false_hit_rate must lie in [0, 1), got {false_hit_rate!r}")
+    eps = unit_interval(false_hit_rate, "false_hit_rate", high_open=True)
     c_hit, c_miss = c[g & (c > 0)], c[~g]
     if c_hit.size == 0:
-        raise ValueError("no hit where the model predicts gas from this source: the maximum-likelihood κ is 0")
+        raise ValueError("hits: no hit where the model predicts gas from this source (predicted > 0): the maximum-likelihood κ is 0")
     miss_sum = float(c_miss.sum())
     if not miss_sum > 0:
-        raise ValueError("no miss where the model predicts gas from this source: the maximum-likelihood κ is ∞")
+        raise ValueError("hits: no miss where the model predicts gas from this source (predicted > 0): the maximum-likelihood κ is ∞")
 
     def score(log_kappa: float) -> float:
         kappa = np.exp(log_kappa)
@@ -114,7 +113,7 @@ def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> floa
     while score(lo) <= 0:
         lo -= 10.0
         if lo < -700:
-            raise ValueError("the maximum-likelihood κ is 0: false hits alone explain the hits")
+            raise ValueError("predicted, hits and false_hit_rate: the maximum-likelihood κ is 0: false hits alone explain the hits")
     while score(hi) >= 0:
         hi += 10.0
         if hi > 700:

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._grid import GridMap
+from .._validate import as_float_array
 
 __all__ = ["advection_diffusion_operator", "bernoulli"]
 
@@ -56,7 +57,9 @@ def bernoulli(x) -> np.ndarray:
     >>> bool(np.allclose(bernoulli([0.0, 1.0, -1.0, 800.0]), [1.0, 1 / (np.e - 1), np.e / (np.e - 1), 0.0]))
     True
     """
-    x = np.asarray(x, dtype=np.float64)
+    x = as_float_array(x, "x", dtype=np.float64)
+    if not np.isfinite(x).all():
+        raise ValueError(f"x must be finite, got {x[~np.isfinite(x)][0]} among its entries")
     out = np.empty_like(x)
     small = np.abs(x) < 1e-3
     xs = x[small]

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._fov import field_of_view
+from .._validate import positive
 from ._classes import OTHER, match_names
 from ._detector import DetectorModel
 
@@ -42,6 +43,10 @@ class Camera:
     vertical_half_angle: float = float(np.deg2rad(30.0))
 
     def __post_init__(self):
+        for name in ("max_range", "half_angle", "min_range", "height", "vertical_half_angle"):
+            unit = "radians" if "angle" in name else "metres"
+            object.__setattr__(self, name, positive(getattr(self, name), f"Camera.{name}", unit,
+                                                    allow_zero=name in ("min_range", "height")))
         if not (0 <= self.min_range < self.max_range and np.isfinite(self.max_range)):
             raise ValueError(f"need 0 <= min_range < max_range, got {self.min_range!r}, {self.max_range!r}")
         if not 0 < self.half_angle <= np.pi:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import names as _names
+
 __all__ = ["HOUSE_CLASSES", "HOUSE_ROOMS", "OTHER", "match_names", "reindex"]
 
 #: Catch-all class for cells that hold no listed object.
@@ -49,6 +51,8 @@ def match_names(names, targets) -> np.ndarray:
     >>> match_names(["LivingRoom", "Garage"], ["kitchen", "living room"])
     array([ 1, -1])
     """
+    names = _names(names, "names", allow_empty=True, unique=False)
+    targets = _names(targets, "targets", allow_empty=True, unique=False)
     lookup = {}
     for i, t in enumerate(targets):
         lookup.setdefault(_key(t), i)

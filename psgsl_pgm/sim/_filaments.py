@@ -24,6 +24,7 @@ import numpy as np
 
 from ._fileio import number, read_yaml_mapping
 from .._grid import GridMap
+from .._validate import positive
 from .._sight import LineOfSightCache
 from ._wind import WindField, WindSequence
 
@@ -62,12 +63,9 @@ class FilamentParams:
 
     def __post_init__(self):
         for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not np.isfinite(v):
-                raise TypeError(f"FilamentParams.{f.name} must be a finite number, got {v!r}")
-            if v < 0 or (v == 0 and f.name in ("dt", "sigma0", "cutoff")):
-                raise ValueError(f"FilamentParams.{f.name} must be {'> 0' if f.name in ('dt', 'sigma0', 'cutoff') else '>= 0'}, got {v!r}")
-            object.__setattr__(self, f.name, float(v))
+            v = positive(getattr(self, f.name), f"FilamentParams.{f.name}",
+                         allow_zero=f.name not in ("dt", "sigma0", "cutoff"))  # bools, strings, 10**400 refused
+            object.__setattr__(self, f.name, v)
 
 
 _GADEN_KEYS = {  # GADEN key -> (field, scale to SI)

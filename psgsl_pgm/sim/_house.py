@@ -19,6 +19,7 @@ import scipy.ndimage as ndi
 
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER
 from .._grid import GridMap
+from .._validate import positive, real_pair
 from ._objects import SceneObject, box_footprint
 
 __all__ = ["House", "default_house", "segment_mask"]
@@ -209,12 +210,11 @@ def segment_mask(grid: GridMap, p0, p1, *, width: float) -> np.ndarray:
     >>> segment_mask(g, (1.0, 0.0), (4.0, 0.0), width=0.6).sum()
     np.int64(3)
     """
-    a = np.asarray(p0, dtype=np.float64)
-    b = np.asarray(p1, dtype=np.float64)
-    if a.shape != (2,) or b.shape != (2,):
-        raise ValueError(f"p0 and p1 must be (x, y) points, got {p0!r}, {p1!r}")
-    if not width > 0:
-        raise ValueError(f"width must be positive metres, got {width!r}")
+    if not isinstance(grid, GridMap):
+        raise TypeError(f"grid must be a GridMap, got {type(grid).__name__} {grid!r}")
+    a = real_pair(p0, "p0", "an (x, y)", "metres")
+    b = real_pair(p1, "p1", "an (x, y)", "metres")
+    width = positive(width, "width", "metres")
     c = grid.cell_centres()
     d = b - a
     t = np.clip(((c - a) @ d) / max(d @ d, 1e-300), 0.0, 1.0)

@@ -21,18 +21,20 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ._fileio import check_keys, number, number_list, read_yaml_mapping
 from .._grid import GridMap
+from .._validate import as_float_array, real_number, real_pair
+from ._fileio import check_keys, number, number_list, read_yaml_mapping
 
 __all__ = ["SceneObject", "box_footprint", "load_objects", "save_objects"]
 
 
 def box_footprint(center, size, yaw: float = 0.0) -> np.ndarray:
     """(4, 2) corners of a rectangle of ``size`` (sx, sy) centred at ``center``, rotated by ``yaw``."""
-    cx, cy = (float(v) for v in center)
-    sx, sy = (float(v) for v in size)
+    cx, cy = real_pair(center, "center", "an (x, y)", "metres")
+    sx, sy = real_pair(size, "size", "an (sx, sy)", "metres")
     if not (sx > 0 and sy > 0):
         raise ValueError(f"size must be positive (sx, sy) in metres, got {size!r}")
+    yaw = real_number(yaw, "yaw", unit="radians")
     half = np.array([[-sx, -sy], [sx, -sy], [sx, sy], [-sx, sy]]) / 2
     c, s = np.cos(yaw), np.sin(yaw)
     return half @ np.array([[c, s], [-s, c]]) + (cx, cy)
@@ -60,14 +62,16 @@ class SceneObject:
     name: str = field(default="")
 
     def __post_init__(self):
+        if not isinstance(self.name, str):
+            raise TypeError(f"name must be a string, got {type(self.name).__name__} {self.name!r}")
         if not isinstance(self.class_name, str) or not self.class_name:
             raise TypeError(f"class_name must be a non-empty string, got {self.class_name!r}")
-        fp = np.array(self.footprint, dtype=np.float64)
+        fp = np.array(as_float_array(self.footprint, "footprint", dtype=np.float64))
         if fp.ndim != 2 or fp.shape[1] != 2 or fp.shape[0] < 3 or not np.all(np.isfinite(fp)):
             raise ValueError(f"footprint must be a finite (n >= 3, 2) polygon, got shape {fp.shape}")
         fp.flags.writeable = False
-        z0, z1 = (float(v) for v in self.z_range)
-        if not (np.isfinite(z0) and np.isfinite(z1) and z0 < z1):
+        z0, z1 = (float(v) for v in real_pair(self.z_range, "z_range", "a (z_min, z_max)", "metres"))
+        if not z0 < z1:
             raise ValueError(f"z_range must be (z_min, z_max) with z_min < z_max, got {self.z_range!r}")
         object.__setattr__(self, "footprint", fp)
         object.__setattr__(self, "z_range", (z0, z1))
