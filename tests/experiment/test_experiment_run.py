@@ -101,7 +101,7 @@ def test_run_search_rejects_bad_arguments():
         run_search("oven", 0, config=ExperimentConfig(gas="ammonia"), tour=None)
     with pytest.raises(ValueError, match="snapshot_at must hold fractions"):
         run_search("oven", 0, snapshot_at=(1.5,))
-    with pytest.raises(ValueError, match="speed must be > 0"):
+    with pytest.raises(ValueError, match="speed must be a positive finite number, got 0.0"):
         ExperimentConfig(speed=0.0)
     with pytest.raises(ValueError, match="a source position must read"):
         run_search("1,2,3", 0)
