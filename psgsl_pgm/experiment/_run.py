@@ -18,10 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._fusion import fuse
-from .._semantic import semantic_source_probability
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._metrics import error_and_spread
+from ._step import VariantPosteriors, semantic_terms, visit
 from ._tour import Tour, exploration_tour
 
 __all__ = ["RunResult", "run_config", "run_search", "semantic_terms", "walk"]
@@ -67,44 +66,17 @@ class RunResult:
         return len(self.time) - 1
 
 
-def semantic_terms(maps, likelihood, class_prior):
-    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W).
-
-    Voxel maps (H, W, L, k) are reduced to columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene
-    Representations").
-    """
-    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior,
-                                                 column_axis=2 if m.probs.ndim == 4 else None) for m in maps])
-
-
 def walk(world, tour: Tour, config: ExperimentConfig, *, camera: bool = True):
     """Drive ``world``'s robot along ``tour``: yields ``(j, stop, gas reading, wind, frames)`` per stop.
 
     Between stops the world advances by the driving time (distance / ``config.speed``); at a look-around
-    waypoint by ``config.turn_time`` per heading. ``camera=False`` skips the frames (calibration runs).
+    waypoint by ``config.turn_time`` per heading (:func:`visit`). ``camera=False`` skips the frames
+    (calibration runs).
     """
     for j, stop in enumerate(tour.stops):
-        if j:
-            world.advance(float(np.linalg.norm(stop - tour.stops[j - 1])) / config.speed)  # drive
-        reading = world.sense_gas(stop)
-        wind = world.sense_wind(stop)
-        frames = []
-        for heading in tour.headings[j] if camera else ():
-            frames.append(world.camera_frame((stop[0], stop[1], heading)))
-            if len(tour.headings[j]) > 1:
-                world.advance(config.turn_time)  # turn to the next heading
+        drive = float(np.linalg.norm(stop - tour.stops[j - 1])) if j else 0.0
+        reading, wind, frames = visit(world, stop, tour.headings[j], config, drive=drive, camera=camera)
         yield j, stop, reading, wind, frames
-
-
-def _make_estimator(name, model, config, *, prior=None):
-    from ..olfaction import GridInfotaxis, PMFSEstimator
-
-    if name == "infotaxis":
-        return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
-                                        false_hit_rate=config.false_hit_rate)
-    if name == "pmfs":
-        return PMFSEstimator.from_model(model, prior=prior)
-    raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 
 def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
@@ -137,9 +109,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     -------
     RunResult
     """
-    from .. import room_evidence, update_class_probs
-    from ..olfaction import PlumeModel
-    from ..sim import SemanticMap, default_world, match_names, reindex
+    from ..sim import default_world
 
     config = ExperimentConfig() if config is None else config
     if not isinstance(config, ExperimentConfig):
@@ -156,33 +126,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     tour = exploration_tour(house, start=setting.start_for(house)) if tour is None else tour
     if config.stops is not None and config.stops < len(tour):
         tour = tour.first(config.stops)
-    ontology = setting.ontology
-    if config.gas not in ontology.gases:
-        raise ValueError(f"gas must be one of the ontology's gases {ontology.gases}, got {config.gas!r}")
-    classes = world.detector.classes
-    order = match_names(classes, ontology.classes)
-    if (order < 0).any():
-        raise ValueError(f"the detector's classes {classes} are not all in the ontology {ontology.classes}")
-    likelihood = ontology.source_likelihood(config.gas)[order]  # p(o | s, γ) in the detector's class order
-    beta = ontology.class_prior[order]  # β = p(o | ¬s)
-    room_table = ontology.room_table[:, order]
-    room_table = room_table / room_table.sum(axis=1, keepdims=True)
-    mapped = setting.class_beliefs is not None  # a mapper's beliefs replace the simulated camera
-    if mapped:
-        given = setting.class_beliefs[..., order]
-        labels = reindex(house.room_labels, house.room_names, ontology.rooms)
-        factor = room_evidence(labels, room_table, beta)  # p(o | room) / p(o); 1 outside listed rooms
-        if given.ndim == 4:
-            factor = factor[:, :, None, :]
-        plain = SemanticMap(given, classes)
-        rooms = SemanticMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
-    else:
-        plain = world.semantic_map(beta)
-        rooms = world.semantic_map(beta, room_table=room_table, room_names=ontology.rooms)
-    model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
-                                     diffusivity=config.diffusivity, lifetime=config.lifetime,
-                                     encounter_scale=config.encounter_scale)
-    est = _make_estimator(estimator, model, config, prior=setting.region_mask(house).astype(np.float64))
+    beliefs = VariantPosteriors(world, estimator, config, setting=setting)  # shared with the closed loop
     centres = house.grid.cell_centres()
     truth = world.source
 
@@ -200,9 +144,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     t0 = world.time
 
     def record(step):
-        p_g = est.posterior  # p(s | g)
-        p_z = semantic_terms((plain, rooms), likelihood, beta)  # p(s | z) without / with rooms
-        post = np.stack([p_g, fuse(p_g, p_z[0]), fuse(p_g, p_z[1])])  # p(s | g, z) ∝ p(s | g) p(s | z)
+        post = beliefs.posteriors(VARIANTS)  # p(s | g), and p(s | g, z) without / with rooms
         err[step], spr[step] = error_and_spread(post, centres, truth)
         times[step] = world.time - t0
         if step in keep:
@@ -210,11 +152,8 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
 
     pos[0] = tour.stops[0]
     record(0)
-    for j, stop, reading, wind, frames in walk(world, tour, config, camera=not mapped):
-        est.update(stop, reading.hit, wind)
-        for frame in frames:
-            plain.update(frame)  # the same frames for both maps: one observation stream
-            rooms.update(frame)
+    for j, stop, reading, wind, frames in walk(world, tour, config, camera=not beliefs.mapped):
+        beliefs.observe(stop, reading, wind, frames)
         pos[j + 1], hits[j + 1] = stop, reading.hit
         record(j + 1)
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"

@@ -1,0 +1,153 @@
+"""The per-step code shared by the fixed tour (:func:`run_search`) and the closed loop (:mod:`psgsl_pgm.search`).
+
+One :class:`VariantPosteriors` holds the robot's state of knowledge — one olfactory estimator p(s | g) and two
+class-belief maps (from p(o), and from the room-category map) fed by the same frames — and turns it into the
+posterior of each information variant of :data:`VARIANTS`:
+
+    olfaction        p(s | g)
+    semantics        p(s | g, z)     ∝ p(s | g) · p(s | z)        (class beliefs from p(o))
+    semantics+rooms  p(s | g, z)     ∝ p(s | g) · p(s | z)        (class beliefs from p(o | room))
+
+:func:`visit` is the robot's physics at one stop: drive (the gas keeps evolving), one gas reading, one wind
+reading, and the camera frames at the requested headings (turning between them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._fusion import fuse
+from .._semantic import semantic_source_probability
+from ._config import ESTIMATORS, VARIANTS, ExperimentConfig
+
+__all__ = ["VariantPosteriors", "make_estimator", "semantic_terms", "visit"]
+
+
+def semantic_terms(maps, likelihood, class_prior):
+    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W).
+
+    Voxel maps (H, W, L, k) are reduced to columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene
+    Representations").
+    """
+    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior,
+                                                 column_axis=2 if m.probs.ndim == 4 else None) for m in maps])
+
+
+def make_estimator(name, model, config, *, prior=None):
+    """The olfactory estimator ``name`` of :data:`ESTIMATORS` on ``model`` with ``config``'s settings."""
+    from ..olfaction import GridInfotaxis, PMFSEstimator
+
+    if name == "infotaxis":
+        return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
+                                        false_hit_rate=config.false_hit_rate)
+    if name == "pmfs":
+        return PMFSEstimator.from_model(model, prior=prior)
+    raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
+
+
+def visit(world, stop, headings, config: ExperimentConfig, *, drive: float = 0.0, turn: float = 0.0,
+          camera: bool = True):
+    """The robot at one stop: returns ``(gas reading, wind, frames)``.
+
+    The world first advances by ``drive`` / ``config.speed`` (driving ``drive`` metres) and by ``turn`` seconds
+    (turning before the stop's first frame), both skipped when zero; then one gas reading and one wind
+    reading at ``stop``; then one frame per heading, with ``config.turn_time`` after each when there are
+    several (a look-around). ``camera=False`` skips the frames (calibration runs).
+    """
+    if drive:
+        world.advance(float(drive) / config.speed)
+    if turn:
+        world.advance(float(turn))
+    reading = world.sense_gas(stop)
+    wind = world.sense_wind(stop)
+    frames = []
+    for heading in headings if camera else ():
+        frames.append(world.camera_frame((stop[0], stop[1], heading)))
+        if len(headings) > 1:
+            world.advance(config.turn_time)  # turn to the next heading
+    return reading, wind, frames
+
+
+class VariantPosteriors:
+    """The robot's beliefs in a world, and the posterior of every information variant (see module docstring).
+
+    Parameters
+    ----------
+    world : psgsl_pgm.sim.World
+    estimator : {"infotaxis", "pmfs"}
+    config : ExperimentConfig
+    setting : world spec, optional, keyword-only
+        The ontology, source region (the estimators' prior) and optional mapper beliefs of the world
+        (:func:`psgsl_pgm.load_world`); default :func:`psgsl_pgm.sim.default_world`.
+
+    Attributes
+    ----------
+    estimator : OlfactoryEstimator
+        p(s | g), shared by the variants.
+    maps : dict
+        ``{"semantics": SemanticMap, "semantics+rooms": SemanticMap}``.
+    likelihood, class_prior : (k,) ndarray
+        p(o | s, γ) and β = p(o | ¬s) in the detector's class order.
+    model : PlumeModel
+    mapped : bool
+        Whether the class beliefs come from a mapper (then the camera is not used).
+    """
+
+    def __init__(self, world, estimator: str, config: ExperimentConfig, *, setting=None):
+        from .. import room_evidence, update_class_probs
+        from ..olfaction import PlumeModel
+        from ..sim import SemanticMap, default_world, match_names, reindex
+
+        setting = default_world() if setting is None else setting
+        house = world.house
+        ontology = setting.ontology
+        if config.gas not in ontology.gases:
+            raise ValueError(f"gas must be one of the ontology's gases {ontology.gases}, got {config.gas!r}")
+        classes = world.detector.classes
+        order = match_names(classes, ontology.classes)
+        if (order < 0).any():
+            raise ValueError(f"the detector's classes {classes} are not all in the ontology {ontology.classes}")
+        self.likelihood = ontology.source_likelihood(config.gas)[order]  # p(o | s, γ) in the detector's order
+        self.class_prior = beta = ontology.class_prior[order]  # β = p(o | ¬s)
+        room_table = ontology.room_table[:, order]
+        room_table = room_table / room_table.sum(axis=1, keepdims=True)
+        self.mapped = setting.class_beliefs is not None  # a mapper's beliefs replace the simulated camera
+        if self.mapped:
+            given = setting.class_beliefs[..., order]
+            labels = reindex(house.room_labels, house.room_names, ontology.rooms)
+            factor = room_evidence(labels, room_table, beta)  # p(o | room) / p(o); 1 outside listed rooms
+            if given.ndim == 4:
+                factor = factor[:, :, None, :]
+            plain = SemanticMap(given, classes)
+            rooms = SemanticMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
+        else:
+            plain = world.semantic_map(beta)
+            rooms = world.semantic_map(beta, room_table=room_table, room_names=ontology.rooms)
+        self.maps = {"semantics": plain, "semantics+rooms": rooms}
+        self.model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
+                                              diffusivity=config.diffusivity, lifetime=config.lifetime,
+                                              encounter_scale=config.encounter_scale)
+        self.estimator = make_estimator(estimator, self.model, config,
+                                        prior=setting.region_mask(house).astype(np.float64))
+
+    def observe(self, stop, reading, wind, frames) -> None:
+        """Assimilate one stop: the gas reading into p(s | g), every frame into both class-belief maps."""
+        self.estimator.update(stop, reading.hit, wind)
+        for frame in frames:
+            for m in self.maps.values():  # the same frames for both maps: one observation stream
+                m.update(frame)
+
+    def semantic(self, variant: str) -> np.ndarray:
+        """p(s | z) of a semantic variant, (H, W)."""
+        return semantic_terms([self.maps[variant]], self.likelihood, self.class_prior)[0]
+
+    def posteriors(self, variants=VARIANTS) -> np.ndarray:
+        """(len(variants), H, W) posterior of each variant now."""
+        bad = [v for v in variants if v not in VARIANTS]
+        if bad:
+            raise ValueError(f"variants must be among {VARIANTS}, got {bad}")
+        p_g = self.estimator.posterior  # p(s | g)
+        semantic = [v for v in variants if v != "olfaction"]
+        p_z = dict(zip(semantic, semantic_terms([self.maps[v] for v in semantic], self.likelihood,
+                                                self.class_prior))) if semantic else {}
+        return np.stack([p_g if v == "olfaction" else fuse(p_g, p_z[v]) for v in variants])  # p(s|g,z) ∝ p(s|g) p(s|z)
