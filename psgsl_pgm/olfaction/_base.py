@@ -210,7 +210,29 @@ class OlfactoryEstimator(abc.ABC):
         """(K, H*W) P(hit at x_k | s) used for predictions; default: the plume model's 1 − exp(−κ G)."""
         return -np.expm1(-self.model.encounter_scale * self.model.green_rows(flat_cells))
 
-    def information_gain(self, positions) -> np.ndarray:
+    def _flat_cells(self, positions) -> np.ndarray:
+        pos = np.asarray(positions, dtype=np.float64)
+        if pos.ndim != 2 or pos.shape[1] != 2:
+            raise ValueError(f"positions must have shape (n, 2) (x, y in metres), got {pos.shape}")
+        w = self.geometry.shape[1]
+        return np.array([r * w + c for r, c in (self.model.cell_of(p, "positions[i]") for p in pos)], np.int64)
+
+    def hit_probability(self, positions) -> np.ndarray:
+        """Predictive P(hit at x | s) of one reading at each candidate position x, for every candidate source s.
+
+        Parameters
+        ----------
+        positions : (n, 2) array_like of float
+            Sensor positions (x, y) in metres (free cells).
+
+        Returns
+        -------
+        p : (n, H, W) ndarray of float64
+            The estimator's hit model (untempered; with false hits for :class:`GridInfotaxis`).
+        """
+        return self._hit_likelihood_rows(self._flat_cells(positions)).reshape((-1,) + self.geometry.shape)
+
+    def information_gain(self, positions, *, posterior=None) -> np.ndarray:
         """Expected information about S from one hit/miss reading at each candidate position, I(S; hit_x).
 
         I(S; hit_x) = H_b(Σ_s p(s) P_x(s)) − Σ_s p(s) H_b(P_x(s)) with the binary entropy H_b and
@@ -222,19 +244,27 @@ class OlfactoryEstimator(abc.ABC):
         ----------
         positions : (n, 2) array_like of float
             Candidate sensor positions (x, y) in metres (free cells).
+        posterior : (H, W) array_like, optional, keyword-only
+            The distribution p(s) of S under which to evaluate (default: this estimator's p(s | g)); e.g. the
+            fused p(s | g, z) when the robot also uses semantics.
 
         Returns
         -------
         gain : (n,) ndarray of float64
             Non-negative, at most ln 2.
         """
-        pos = np.asarray(positions, dtype=np.float64)
-        if pos.ndim != 2 or pos.shape[1] != 2:
-            raise ValueError(f"positions must have shape (n, 2) (x, y in metres), got {pos.shape}")
-        w = self.geometry.shape[1]
-        flat = np.array([r * w + c for r, c in (self.model.cell_of(p, "positions[i]") for p in pos)], np.int64)
+        flat = self._flat_cells(positions)
+        if posterior is None:
+            post = self._post
+        else:
+            post = np.asarray(posterior, dtype=np.float64)
+            if post.shape != self.geometry.shape:
+                raise ValueError(f"posterior must have the map's shape {self.geometry.shape}, got {post.shape}")
+            if not (np.isfinite(post).all() and (post >= 0).all() and abs(post.sum() - 1.0) < 1e-9):
+                raise ValueError("posterior must be a distribution over the map's cells (finite, >= 0, sums to 1)")
+            post = post.ravel()
         p_hit = self._hit_likelihood_rows(flat)  # (n, H*W)
-        p_bar = p_hit @ self._post  # predictive P(hit at x)
+        p_bar = p_hit @ post  # predictive P(hit at x)
         h_bin = entr(p_hit) + entr(1.0 - p_hit)  # H_b(P_x(s))
-        gain = entr(p_bar) + entr(1.0 - p_bar) - h_bin @ self._post  # I = H_b(p̄) − E_s[H_b]
+        gain = entr(p_bar) + entr(1.0 - p_bar) - h_bin @ post  # I = H_b(p̄) − E_s[H_b]
         return np.maximum(gain, 0.0)  # round-off can give −1e-17

@@ -1,6 +1,32 @@
 """Closed-loop search: policies that choose where to go and where to look with φ(p) = φ_G(p) + φ_O(p)
-(Sec. "Information Gain Optimization"), and the open-space benchmark of the literature."""
+(Sec. "Information Gain Optimization"), the closed loop in the simulated house through the validation
+experiment's own per-step code, declarations with credible regions, and the open-space benchmark.
+"""
 
+from ._loop import SearchConfig, SearchRun, run_closed_loop
+from ._metrics import credible_region, paired_difference, survival, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
+from ._policies import POLICIES, Decision, Situation, choose, score_per_time, travel_time
+from ._space import FreeSpace
 
-__all__ = ["OPEN_SPACE_POLICIES", "OpenSpaceSearch", "grid_size", "hit_probability", "open_space_benchmark"]
+__all__ = [
+    "Decision",
+    "FreeSpace",
+    "OPEN_SPACE_POLICIES",
+    "OpenSpaceSearch",
+    "POLICIES",
+    "SearchConfig",
+    "SearchRun",
+    "Situation",
+    "choose",
+    "credible_region",
+    "grid_size",
+    "hit_probability",
+    "open_space_benchmark",
+    "paired_difference",
+    "run_closed_loop",
+    "score_per_time",
+    "survival",
+    "travel_time",
+    "wilson_interval",
+]

@@ -1,0 +1,80 @@
+"""Figures of the closed loop: survival curves and the robots' paths over their final posteriors."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._metrics import survival
+
+__all__ = ["plot_paths", "plot_survival"]
+
+
+def plot_survival(groups: dict, *, title: str = ""):
+    """Fraction of runs not yet found against simulated time, one line per ``"<policy>/<variant>"``.
+
+    Parameters
+    ----------
+    groups : dict
+        ``{"<policy>/<variant>": [SearchRun, ...]}``.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    budget = max(r.config["search"]["time_budget"] for v in groups.values() for r in v)
+    grid = np.linspace(0.0, budget, 501)
+    styles = {"olfaction": ":", "semantics": "--", "semantics+rooms": "-"}
+    for key, runs in groups.items():
+        policy, variant = key.split("/")
+        s = survival([r.time_to_find for r in runs], [r.found for r in runs], grid)
+        ax.step(grid, s, where="post", ls=styles.get(variant, "-"), label=f"{key} (n = {len(runs)})")
+    ax.set_xlabel("simulated time since the start [s]")
+    ax.set_ylabel("fraction of runs not yet found [-]")
+    ax.set_xlim(0, budget)
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower left")
+    ax.set_title(title or "survival: runs not yet within found_radius of the source", fontsize=9)
+    return fig
+
+
+def plot_paths(runs: dict, house, *, title: str = "", floor: float = 1e-6):
+    """Each run's path over its final posterior, one panel per ``"<policy>/<variant>"``, one colour scale.
+
+    The colour is log10 of the posterior per cell, on one scale for every panel (from ``floor`` to the largest
+    value of any panel), with one colour bar; walls are dark grey; the path is white, the start a circle, the
+    true source a star.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
+
+    keys = list(runs)
+    n = len(keys)
+    cols = min(n, 3)
+    rows = int(np.ceil(n / cols))
+    g = house.grid
+    h, w = house.shape
+    extent = (g.origin[0], g.origin[0] + w * g.resolution, g.origin[1], g.origin[1] + h * g.resolution)
+    vmax = max(float(r.final_posterior.max()) for r in runs.values())
+    norm = LogNorm(vmin=floor, vmax=max(vmax, floor * 10))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols + 0.8, 3.9 * rows), squeeze=False, layout="constrained")
+    walls = np.ma.masked_where(~g.occupancy, np.ones(house.shape))
+    im = None
+    for ax, key in zip(axes.ravel(), keys):
+        r = runs[key]
+        post = np.clip(r.final_posterior.astype(np.float64), floor, None)
+        im = ax.imshow(post, origin="lower", extent=extent, norm=norm, cmap="viridis", interpolation="nearest")
+        ax.imshow(walls, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.4, interpolation="nearest")
+        ax.plot(r.path[:, 0], r.path[:, 1], color="white", lw=1.0)
+        ax.plot(*r.path[0], "o", color="white", ms=5, mec="k")
+        ax.plot(*r.source_xy, "*", color="red", ms=11, mec="k")
+        state = f"found at {r.time_to_find:.0f} s" if r.found else f"not found in {r.time_to_find:.0f} s"
+        ax.set_title(f"{key}\n{state}, {r.driven:.1f} m", fontsize=8)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    cb = fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8)
+    cb.set_label("final posterior p(s) per cell [-] (log scale)")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return fig

@@ -1,0 +1,195 @@
+"""The closed-loop grid (sources × policies × variants × estimators × seeds): resumable runs, summaries,
+paired differences, per-run CSV and figures (``psgsl search``)."""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
+from ..experiment._driver import run_jobs
+from ..experiment._metrics import mean_ci
+from ._loop import SearchConfig, run_closed_loop
+from ._metrics import paired_difference, wilson_interval
+from ._policies import POLICIES
+from ._store import load_search_run, save_search_run, search_run_path
+
+__all__ = ["run_search_grid", "summarize_runs", "write_search_outputs"]
+
+
+def _job(args):
+    source, seed, policy, variant, estimator, config, search, path = args
+    run = run_closed_loop(source, seed, policy, variant, estimator, config=config, search=search)
+    save_search_run(run, path)
+    return str(path)
+
+
+def _config_of(config: ExperimentConfig, search: SearchConfig) -> dict:
+    return {"experiment": config.to_dict(), "search": search.to_dict()}
+
+
+def summarize_runs(runs) -> dict:
+    """Statistics of one policy × variant over its runs (see :func:`run_search_grid`)."""
+    found = np.array([r.found for r in runs])
+    t = np.array([r.time_to_find for r in runs])
+    n = len(runs)
+    budget = runs[0].config["search"]["time_budget"]
+    ttf = mean_ci(t)
+    ttf.update(median=float(np.median(t)), not_found=int((~found).sum()), budget=float(budget),
+               note="runs not found count at the budget")
+    ratio = np.array([r.path_ratio for r in runs])
+    return {
+        "n_runs": n,
+        "success_rate": {"value": float(found.mean()), "ci95": wilson_interval(int(found.sum()), n)},
+        "time_to_find": ttf,
+        "path_ratio": mean_ci(ratio),
+        "coverage90": float(np.mean([r.region_hit[-1] for r in runs])),
+        "coverage90_all_steps": float(np.mean(np.concatenate([r.region_hit for r in runs]))),
+        "final_error": mean_ci([r.error[-1] for r in runs]),
+        "final_region_area": mean_ci([r.region_area[-1] for r in runs]),
+        "mean_error": mean_ci([_time_mean(r.time, r.error) for r in runs]),
+        "seeds": [int(r.seed) for r in runs],
+    }
+
+
+def _time_mean(time, values) -> float:
+    """Mean over the search time of a step function (each value holds until the next stop)."""
+    if len(time) < 2 or time[-1] <= 0:
+        return float(values[0])
+    return float(np.sum(values[:-1] * np.diff(time)) / time[-1])
+
+
+def _paired(groups: dict) -> dict:
+    """Paired differences of time to find (same seeds): every key vs the same policy with ``olfaction``,
+    and vs ``tour`` (same variant if run, else ``tour/olfaction``)."""
+    out = {}
+    for key, runs in groups.items():
+        policy, variant = key.split("/")
+        refs = []
+        if variant != "olfaction" and f"{policy}/olfaction" in groups:
+            refs.append(f"{policy}/olfaction")
+        if policy != "tour":
+            refs.append(f"tour/{variant}" if f"tour/{variant}" in groups else "tour/olfaction")
+        for ref in refs:
+            if ref not in groups:
+                continue
+            a = {r.seed: r for r in runs}
+            b = {r.seed: r for r in groups[ref]}
+            seeds = sorted(set(a) & set(b))
+            if len(seeds) < 2:
+                continue
+            diff = paired_difference([a[s].time_to_find for s in seeds], [b[s].time_to_find for s in seeds])
+            diff["found_both"] = int(sum(a[s].found and b[s].found for s in seeds))
+            out[f"{key} - {ref}"] = {"time_to_find": diff}
+    return out
+
+
+def _write_json(obj, path: Path) -> None:
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_text(json.dumps(obj, indent=2, sort_keys=True) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+
+
+_CSV = ("source", "estimator", "policy", "variant", "seed", "found", "time_to_find", "driven", "geodesic",
+        "path_ratio", "n_steps", "final_error", "final_map_error", "final_spread", "final_region_area",
+        "final_region_hit", "mean_error")
+
+
+def _write_csv(runs, path: Path) -> None:
+    tmp = path.with_name(path.name + ".part")
+    with open(tmp, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(_CSV)
+        for r in runs:
+            w.writerow([r.source, r.estimator, r.policy, r.variant, r.seed, int(r.found), f"{r.time_to_find:.6g}",
+                        f"{r.driven:.6g}", f"{r.geodesic:.6g}", f"{r.path_ratio:.6g}", r.n_steps,
+                        f"{r.error[-1]:.6g}", f"{r.map_error[-1]:.6g}", f"{r.spread[-1]:.6g}",
+                        f"{r.region_area[-1]:.6g}", int(r.region_hit[-1]), f"{_time_mean(r.time, r.error):.6g}"])
+    os.replace(tmp, path)
+
+
+def write_search_outputs(out, *, figures: bool = True) -> dict:
+    """Aggregate every run stored in ``out/runs``: per source × estimator a folder with ``summary.json``
+    (one entry per ``"<policy>/<variant>"``), ``paired.json``, ``runs.csv`` and figures; plus ``out/summary.json``
+    (``{"<source>/<estimator>": {"<policy>/<variant>": ...}}``) and ``out/runs.csv`` over all of them."""
+    out = Path(out)
+    files = sorted((out / "runs").glob("*.npz"))
+    runs = [load_search_run(f) for f in files]
+    if not runs:
+        raise ValueError(f"no search runs stored in {out / 'runs'}")
+    groups: dict = {}
+    for r in runs:
+        groups.setdefault((r.source, r.estimator), {}).setdefault(f"{r.policy}/{r.variant}", []).append(r)
+    order = {k: i for i, k in enumerate(f"{p}/{v}" for p in POLICIES for v in VARIANTS)}
+    top = {}
+    for (source, estimator), by_key in sorted(groups.items()):
+        by_key = {k: sorted(by_key[k], key=lambda r: r.seed) for k in sorted(by_key, key=order.get)}
+        folder = out / f"{source_label(source)}-{estimator}"
+        folder.mkdir(parents=True, exist_ok=True)
+        summary = {k: summarize_runs(v) for k, v in by_key.items()}
+        _write_json(summary, folder / "summary.json")
+        _write_json(_paired(by_key), folder / "paired.json")
+        _write_csv([r for v in by_key.values() for r in v], folder / "runs.csv")
+        top[f"{source}/{estimator}"] = summary
+        if figures:
+            import matplotlib.pyplot as plt
+
+            from ..sim import default_house
+            from ._figures import plot_paths, plot_survival
+
+            fig = plot_survival(by_key, title=f"source {source}, estimator {estimator}")
+            fig.savefig(folder / "survival.png", dpi=120)
+            plt.close(fig)
+            seed = min(r.seed for v in by_key.values() for r in v)
+            shown = {k: next(r for r in v if r.seed == seed) for k, v in by_key.items() if any(r.seed == seed for r in v)}
+            fig = plot_paths(shown, default_house(seed), title=f"source {source}, estimator {estimator}, seed {seed}")
+            fig.savefig(folder / "paths.png", dpi=110)
+            plt.close(fig)
+    _write_json(top, out / "summary.json")
+    _write_csv(runs, out / "runs.csv")
+    return top
+
+
+def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=("olfaction", "semantics+rooms"),
+                    estimators=("infotaxis",), seeds=range(10), *, out, workers: int = 2,
+                    config: ExperimentConfig | None = None, search: SearchConfig | None = None,
+                    progress: bool = True, figures: bool = True) -> dict:
+    """Run every (source, policy, variant, estimator, seed) not yet on disk, then aggregate ``out``.
+
+    Finished runs live in ``out/runs`` (one atomic file each) and are never redone; a stored run with another
+    configuration is an error. Aggregation covers every run stored in ``out/runs``
+    (:func:`write_search_outputs`). Returns the top-level summary.
+    """
+    config = ExperimentConfig() if config is None else config
+    search = SearchConfig() if search is None else search
+    sources = [parse_source(s) for s in sources]
+    for name, values, allowed in (("policies", policies, POLICIES), ("variants", variants, VARIANTS),
+                                  ("estimators", estimators, ESTIMATORS)):
+        bad = [v for v in values if v not in allowed]
+        if bad:
+            raise ValueError(f"{name} must be among {allowed}, got {bad}")
+    seeds = [int(s) for s in seeds]
+    if not (sources and policies and variants and estimators and seeds):
+        raise ValueError("need at least one source, policy, variant, estimator and seed")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    out = Path(out)
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    want = _config_of(config, search)
+    jobs = []
+    for source, policy, variant, estimator, seed in itertools.product(sources, policies, variants, estimators, seeds):
+        path = search_run_path(out, source, policy, variant, estimator, seed)
+        if path.exists():
+            stored = load_search_run(path).config
+            if stored != json.loads(json.dumps(want)):
+                raise ValueError(f"{path} was computed with another configuration ({stored}); use a new output "
+                                 "directory or delete the stored runs")
+            continue
+        jobs.append((source, seed, policy, variant, estimator, config, search, path))
+    run_jobs(jobs, _job, workers=workers, progress=progress, desc="closed-loop runs")
+    return write_search_outputs(out, figures=figures)

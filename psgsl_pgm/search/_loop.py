@@ -1,0 +1,333 @@
+"""The closed loop in the simulated house: the policy chooses each stop from the beliefs it has built so far.
+
+Per stop (the validation experiment's own per-step code, :class:`psgsl_pgm.experiment.VariantPosteriors` and
+:func:`psgsl_pgm.experiment.visit`):
+
+    drive along the geodesic path (the gas keeps evolving)  ->  turn the camera  ->  one gas reading, one wind
+    reading, one camera frame  ->  p(s | g) and both class-belief maps updated  ->  the variant's posterior
+    ->  the policy picks the next pose
+
+Every policy starts with the tour's first stop (a look-around at the start). The search ends when the robot
+comes within ``found_radius`` of the true source — of the emitting object's footprint when the source is an
+object (a robot cannot drive into an oven; its nearest drivable cell is 0.55 m from the oven's centre) — at
+any point of its path (found), or at ``time_budget`` s of simulated time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+
+import numpy as np
+
+from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ..experiment._metrics import error_and_spread
+from ._metrics import credible_region
+from ._policies import POLICIES, Situation, choose
+from ._space import FreeSpace
+
+__all__ = ["SearchConfig", "SearchRun", "run_closed_loop"]
+
+
+@dataclass(frozen=True)
+class SearchConfig:
+    """Settings of the closed loop (the physics — speed, turn time, sensors — are the experiment's).
+
+    Parameters
+    ----------
+    found_radius : float
+        m; the source is found when the robot comes this close (the lab's benchmark rule).
+    time_budget : float
+        s of simulated time.
+    horizon : float
+        m of geodesic distance within which candidate positions are considered.
+    spacing : float
+        m, lattice spacing of candidate positions.
+    n_headings : int
+        Camera headings per candidate position.
+    clearance : float
+        m, the robot's distance from walls, furniture and windows (the tour's).
+    start : (2,) tuple
+        Start position, m (the tour's).
+    credible : float
+        Mass of the declared credible region.
+    """
+
+    found_radius: float = 0.5
+    time_budget: float = 1000.0
+    horizon: float = 2.0
+    spacing: float = 0.5
+    n_headings: int = 8
+    clearance: float = 0.25
+    start: tuple = (0.8, 6.0)
+    credible: float = 0.9
+
+    def __post_init__(self):
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "start":
+                xy = np.asarray(v, dtype=np.float64) if not isinstance(v, (str, bytes)) else None
+                if xy is None or xy.shape != (2,) or not np.isfinite(xy).all():
+                    raise ValueError(f"start must be an (x, y) position in metres, got {v!r}")
+                object.__setattr__(self, "start", (float(xy[0]), float(xy[1])))
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not np.isfinite(v):
+                raise TypeError(f"{f.name} must be a finite number, got {v!r}")
+            if v <= 0:
+                raise ValueError(f"{f.name} must be > 0, got {v!r}")
+        if not self.credible < 1:
+            raise ValueError(f"credible must lie in (0, 1), got {self.credible!r}")
+        if int(self.n_headings) != self.n_headings:
+            raise ValueError(f"n_headings must be an integer, got {self.n_headings!r}")
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["start"] = list(self.start)
+        return d
+
+
+@dataclass(frozen=True, eq=False)
+class SearchRun:
+    """One closed-loop search (step 0 = before the first stop).
+
+    Attributes
+    ----------
+    source, seed, policy, variant, estimator : identification
+    source_xy : (2,) ndarray
+        True source position, m.
+    found : bool
+    time_to_find : float
+        s of simulated time when found; ``time_budget`` when not (and ``found`` says so).
+    geodesic : float
+        Geodesic distance from the start to the nearest drivable point within ``found_radius`` of the source, m.
+    driven : float
+        Path length driven until found (or the budget), m.
+    time : (n + 1,) ndarray
+        s since the start, at each stop (step 0: 0).
+    position : (n + 1, 2) ndarray
+        Robot position at each stop (step 0: the start).
+    heading : (n + 1,) ndarray
+        Camera heading of the stop's last frame, rad.
+    hit : (n + 1,) ndarray of bool
+    path_length : (n + 1,) ndarray
+        m driven up to each stop.
+    error, map_error, spread : (n + 1,) ndarray
+        ‖E[s] − s‖, ‖s_MAP − s‖ and √E‖s − E[s]‖² of the variant's posterior, m.
+    region_area : (n + 1,) ndarray
+        Area of the credible region (smallest set of cells holding ``credible`` of the mass), m².
+    region_hit : (n + 1,) ndarray of bool
+        Whether that region contains the true source's cell.
+    path : (p, 2) ndarray
+        Every cell centre driven through, m (for drawing).
+    final_posterior : (H, W) ndarray of float32
+    config : dict
+        ``{"experiment": ExperimentConfig dict, "search": SearchConfig dict}``.
+    """
+
+    source: str
+    seed: int
+    policy: str
+    variant: str
+    estimator: str
+    source_xy: np.ndarray
+    found: bool
+    time_to_find: float
+    geodesic: float
+    driven: float
+    time: np.ndarray
+    position: np.ndarray
+    heading: np.ndarray
+    hit: np.ndarray
+    path_length: np.ndarray
+    error: np.ndarray
+    map_error: np.ndarray
+    spread: np.ndarray
+    region_area: np.ndarray
+    region_hit: np.ndarray
+    path: np.ndarray
+    final_posterior: np.ndarray
+    config: dict = field(default_factory=dict)
+
+    @property
+    def n_steps(self) -> int:
+        return len(self.time) - 1
+
+    @property
+    def path_ratio(self) -> float:
+        """Path length driven until found (or the budget) / geodesic distance from the start to the source."""
+        return float(self.driven / self.geodesic) if self.geodesic > 0 else float("nan")
+
+
+def _target_points(world, house) -> np.ndarray:
+    if world.source_object is not None:
+        cells = np.argwhere(world.source_object.mask(house.grid))
+        return house.grid.cell_to_world(cells)
+    return world.source[None, :]
+
+
+def _tour_plan(tour):
+    """Tour stops back and forth for ever: yields (stop, headings)."""
+    order = list(range(len(tour)))
+    forward = True
+    j = 0
+    while True:
+        seq = order[1:] if j == 0 else (order[::-1][1:] if not forward else order[1:])
+        for k in seq:
+            hs = tour.headings[k]
+            if not forward and len(hs) == 1:
+                hs = hs + np.pi  # travel direction, reversed
+            yield tour.stops[k], tuple(float(h) for h in hs)
+        forward = not forward
+        j += 1
+
+
+def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", variant: str = "semantics+rooms",
+                    estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
+                    search: SearchConfig | None = None, world=None, space: FreeSpace | None = None) -> SearchRun:
+    """Run one closed-loop search in the simulated house.
+
+    Parameters
+    ----------
+    source : str or (2,) array_like
+        :func:`psgsl_pgm.experiment.parse_source`.
+    seed : int
+        World seed (house jitter, wind, gas, sensors, detector).
+    policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis"}
+    variant : {"olfaction", "semantics", "semantics+rooms"}
+        Which posterior the robot uses (the experiment's code path for it).
+    estimator : {"infotaxis", "pmfs"}
+    config : ExperimentConfig, optional, keyword-only
+        Physics and estimator settings (the validation experiment's).
+    search : SearchConfig, optional, keyword-only
+    world : psgsl_pgm.sim.World, optional, keyword-only
+    space : FreeSpace, optional, keyword-only
+        Prepared geometry of the world's house (shares caches between runs).
+
+    Returns
+    -------
+    SearchRun
+    """
+    from ..experiment._step import VariantPosteriors, visit
+    from ..experiment._tour import exploration_tour
+    from ..sim import make_world
+
+    config = ExperimentConfig() if config is None else config
+    search = SearchConfig() if search is None else search
+    if not isinstance(config, ExperimentConfig):
+        raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")
+    if not isinstance(search, SearchConfig):
+        raise TypeError(f"search must be a SearchConfig, got {type(search).__name__}")
+    if policy not in POLICIES:
+        raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
+    if variant not in VARIANTS:
+        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+    if estimator not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"seed must be an integer, got {seed!r}")
+    spec = parse_source(source)
+    if world is None:
+        world = make_world(seed=int(seed), source=spec, warm_up=config.warm_up)
+    house = world.house
+    if space is None:
+        space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
+                          n_headings=search.n_headings)
+    beliefs = VariantPosteriors(world, estimator, config)
+    tour = exploration_tour(house, start=search.start, clearance=search.clearance)
+    plan = _tour_plan(tour) if policy == "tour" else None
+    centres = house.grid.cell_centres()
+    truth = world.source
+    target = _target_points(world, house)
+    r = search.found_radius
+    sense_time = world.gas_sensor.window
+    budget = search.time_budget
+
+    def near(points) -> np.ndarray:
+        d2 = ((np.asarray(points)[:, None, :] - target[None, :, :]) ** 2).sum(axis=-1)
+        return d2.min(axis=1) <= r * r
+
+    # geodesic distance from the start to where the source counts as found
+    start_cell = space.snap(search.start)
+    d_start = space.distances(start_cell)
+    reachable = space.nav.ravel() & near(space.centres)
+    geodesic = float(d_start[reachable].min()) if reachable.any() else float("inf")
+
+    rec = {k: [] for k in ("time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
+                           "region_area", "region_hit")}
+    cell_area = house.grid.resolution**2
+    truth_cell = space.cell_of(truth)
+    t0 = world.time
+
+    def record(pos, heading, hit, length):
+        post = beliefs.posteriors((variant,))[0]
+        err, spr = error_and_spread(post[None], centres, truth)
+        best = int(np.argmax(post))
+        region = credible_region(post, search.credible)
+        rec["time"].append(world.time - t0)
+        rec["position"].append(np.asarray(pos, dtype=np.float64))
+        rec["heading"].append(float(heading))
+        rec["hit"].append(bool(hit))
+        rec["path_length"].append(float(length))
+        rec["error"].append(float(err[0]))
+        rec["map_error"].append(float(np.linalg.norm(space.centres[best] - truth)))
+        rec["spread"].append(float(spr[0]))
+        rec["region_area"].append(float(region.sum()) * cell_area)
+        rec["region_hit"].append(bool(region.ravel()[truth_cell]))
+        return post
+
+    start = space.position(start_cell)
+    path_pts = [start]
+    length = 0.0
+    found, t_found = bool(near(start[None])[0]), 0.0
+    post = record(start, tour.headings[0][-1], False, 0.0)
+    headings = tuple(float(h) for h in tour.headings[0])
+    cell, heading = start_cell, headings[-1]
+    first = True
+    while not found and world.time - t0 < budget:
+        if first:  # the common first stop: the tour's look-around at the start
+            stop, drive, turn, seg = start, 0.0, 0.0, start[None]
+            first = False
+        elif plan is not None:
+            stop, headings = next(plan)
+            prev = path_pts[-1]
+            drive = float(np.linalg.norm(stop - prev))
+            n_pts = max(2, int(np.ceil(drive / house.grid.resolution)) + 1)
+            seg = prev[None] + np.linspace(0, 1, n_pts)[:, None] * (stop - prev)[None]
+            seg[-1] = stop  # exactly the stop, so that the next drive is the tour's own distance
+            turn = 0.0  # the tour turns between its own headings (visit), as in the experiment
+        else:
+            sit = Situation(post, beliefs, variant, space, cell, heading, config.speed, config.turn_time,
+                            sense_time, search.horizon, r)
+            dec = choose(policy, sit)
+            cells = dec.path
+            seg = space.position(cells)
+            stop, drive, headings = seg[-1], dec.drive, dec.headings
+            turn = config.turn_time * abs(float(np.angle(np.exp(1j * (headings[0] - heading))))) / (np.pi / 2)
+            cell = dec.cell
+        # found on the way?
+        hits_on_path = near(seg)
+        if hits_on_path.any():
+            k = int(np.argmax(hits_on_path))
+            arc = float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0
+            t = world.time - t0 + arc / config.speed
+            if t <= budget:
+                found, t_found = True, t
+                length += arc
+                path_pts.extend(seg[1 : k + 1])
+                world.advance(arc / config.speed)
+                break
+        reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn)
+        beliefs.observe(stop, reading, wind, frames)
+        length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
+        path_pts.extend(seg[1:])
+        heading = headings[-1]
+        if plan is not None:
+            cell = space.snap(stop)
+        post = record(stop, heading, reading.hit, length)
+    label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
+    arrays = {k: np.array(v) for k, v in rec.items()}
+    return SearchRun(label, int(seed), policy, variant, estimator, truth, bool(found),
+                     float(t_found) if found else float(budget), geodesic, float(length), arrays["time"], arrays["position"],
+                     arrays["heading"], arrays["hit"].astype(bool), arrays["path_length"], arrays["error"],
+                     arrays["map_error"], arrays["spread"], arrays["region_area"], arrays["region_hit"].astype(bool),
+                     np.array(path_pts), post.astype(np.float32),
+                     {"experiment": config.to_dict(), "search": search.to_dict()})

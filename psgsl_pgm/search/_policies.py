@@ -1,0 +1,205 @@
+r"""Policies of the closed loop in a house: given the beliefs and the robot's pose, choose the next pose.
+
+Every policy sees a :class:`Situation` (the variant's posterior, the beliefs, the robot's cell and heading,
+the free space) and returns a :class:`Decision` (the next cell, the camera headings there, the path).
+
+**Scoring rule (gain per unit time).** Candidate poses p = (cell, heading) are those of
+:meth:`FreeSpace.candidates`. Each costs the time
+
+.. math:: \tau(p) = d(p)/v + t_\text{turn}\,|\Delta\theta(p)|/(\pi/2) + t_\text{sense},
+
+the geodesic drive d at speed v, the camera turn Δθ from the current heading (``turn_time`` per quarter turn,
+as on the tour), and the fixed time of one gas reading. A policy's gain G(p) is divided by τ(p):
+score(p) = G(p)/τ(p) when G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it). The
+best score wins; ties go to the first candidate (lattice order) and the first heading. The robot always moves
+(:meth:`FreeSpace.candidates`).
+
+* ``infotaxis`` — the expected information of the next stop, Vergassola et al. (2007) with the probability
+  P_f(p) of finding the source there (the posterior mass within ``found_radius``):
+  G(p) = P_f(p) H(S) + (1 − P_f(p)) [φ_G(p) + φ_O(p)], φ_G = I(S; hit at p) under the variant's posterior and
+  φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
+  Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
+* ``space-aware-infotaxis`` — Loisy & Eloy (2022): the value V = log₂(D + 2^{H−1} − ½), with D the expected
+  distance to the source and H the entropy in bits, estimates log₂ of the remaining search; in the house D is
+  the expected geodesic distance in units of the found diameter ℓ = 2 ``found_radius`` and H is counted over
+  cells of one found disc (H − log₂(π r²/Δx²), floored at 0), so that one "cell" is what one visit can rule
+  out. G(p) = V_now − (1 − P_f) Σ_h P(h | p) V_h(p) over the gas outcome h ∈ {miss, hit}; the semantic
+  extension subtracts the view's expected information φ_O(p)/ln 2 bits from H_h.
+* ``greedy`` — drive towards the most probable cell: the candidate nearest (geodesic) to the MAP cell, with
+  the camera towards it.
+* ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import entr
+
+__all__ = ["Decision", "POLICIES", "Situation", "choose", "score_per_time", "travel_time"]
+
+#: Policies of the closed loop.
+POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis")
+
+
+@dataclass
+class Situation:
+    """What a policy may look at.
+
+    Attributes
+    ----------
+    posterior : (H, W) ndarray
+        The variant's current p(s | ·).
+    beliefs : psgsl_pgm.experiment.VariantPosteriors
+    variant : str
+    space : FreeSpace
+    cell : int
+        The robot's flat cell.
+    heading : float
+        The camera's current heading, rad.
+    speed, turn_time, sense_time : float
+        m/s, s per quarter turn, s per gas reading.
+    horizon, found_radius : float
+        m.
+    """
+
+    posterior: np.ndarray
+    beliefs: object
+    variant: str
+    space: object
+    cell: int
+    heading: float
+    speed: float
+    turn_time: float
+    sense_time: float
+    horizon: float
+    found_radius: float
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The next stop: ``cell`` (flat), camera ``headings`` there, ``path`` (flat cells from the robot's cell,
+    inclusive), ``drive`` (m) and the winning ``score``."""
+
+    cell: int
+    headings: tuple
+    path: np.ndarray
+    drive: float
+    score: float = float("nan")
+
+
+def _wrap(a):
+    return np.angle(np.exp(1j * np.asarray(a, dtype=np.float64)))
+
+
+def travel_time(drive, turn, *, speed: float, turn_time: float, sense_time: float) -> np.ndarray:
+    """τ = drive / speed + turn_time · |turn| / (π/2) + sense_time (s), broadcast over drive and turn."""
+    return (np.asarray(drive, dtype=np.float64) / speed + turn_time * np.abs(turn) / (np.pi / 2) + sense_time)
+
+
+def score_per_time(gain, tau) -> np.ndarray:
+    """The pose-scoring rule: G/τ for G > 0, G·τ otherwise (see the module docstring)."""
+    gain = np.asarray(gain, dtype=np.float64)
+    tau = np.asarray(tau, dtype=np.float64)
+    if np.any(tau <= 0):
+        raise ValueError("travel times must be positive")
+    return np.where(gain > 0, gain / tau, gain * tau)
+
+
+def _candidates(sit: Situation):
+    cells, drive, pred = sit.space.candidates(sit.cell, sit.horizon)
+    turn = _wrap(sit.space.headings[None, :] - sit.heading)  # (1, n_h)
+    tau = travel_time(drive[:, None], turn, speed=sit.speed, turn_time=sit.turn_time, sense_time=sit.sense_time)
+    return cells, drive, pred, tau
+
+
+def _found_mass(sit: Situation, cells):
+    """P_f: posterior mass within found_radius of each candidate cell, (K,), and the masks (K, H·W)."""
+    c = sit.space.position(cells)
+    d2 = ((sit.space.centres[None, :, :] - c[:, None, :]) ** 2).sum(axis=-1)
+    mask = d2 <= sit.found_radius**2
+    return mask @ sit.posterior.ravel(), mask
+
+
+def _view_information(sit: Situation, cells) -> np.ndarray:
+    """φ_O for every candidate × heading (zeros for the olfaction variant)."""
+    if sit.variant == "olfaction":
+        return np.zeros((len(cells), len(sit.space.headings)))
+    from .._infogain import semantic_information_gain
+
+    b = sit.beliefs
+    gain = semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,
+                                     olfactory=b.estimator.posterior, predictive="exact")
+    return sit.space.view_gain(gain.ravel(), cells)
+
+
+def _best(score, cells, pred, drive, sit, *, headings=None):
+    flat = int(np.argmax(score))  # first maximum: lattice order, first heading
+    k, h = divmod(flat, score.shape[1])
+    cell = int(cells[k])
+    heading = float(sit.space.headings[h]) if headings is None else float(headings[k])
+    return Decision(cell, (heading,), sit.space.path(pred, cell), float(drive[k]), float(score.ravel()[flat]))
+
+
+def infotaxis_gain(sit: Situation, cells):
+    """G(p) of infotaxis, (K, n_headings): P_f H(S) + (1 − P_f)(φ_G + φ_O), nats."""
+    p_f, _ = _found_mass(sit, cells)
+    phi_g = sit.beliefs.estimator.information_gain(sit.space.position(cells), posterior=sit.posterior)
+    phi_o = _view_information(sit, cells)
+    h = float(entr(sit.posterior).sum())
+    return p_f[:, None] * h + (1.0 - p_f[:, None]) * (phi_g[:, None] + phi_o)
+
+
+def space_aware_gain(sit: Situation, cells):
+    """G(p) of space-aware infotaxis, (K, n_headings), bits of log₂(remaining search)."""
+    space = sit.space
+    post = sit.posterior.ravel()
+    ell = 2.0 * sit.found_radius
+    disc_bits = np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
+
+    def value(d, h_bits):
+        arg = d / ell + 2.0 ** (np.maximum(h_bits - disc_bits, 0.0) - 1.0) - 0.5
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
+
+    dist_now = space.distances(sit.cell)
+    ok = np.isfinite(dist_now)
+    v_now = value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
+    p_f, mask = _found_mass(sit, cells)
+    q = np.where(mask, 0.0, post[None, :])  # not found within the radius of the candidate
+    q /= np.where(1 - p_f > 0, 1 - p_f, 1.0)[:, None]
+    lik = sit.beliefs.estimator.hit_probability(space.position(cells)).reshape(len(cells), -1)  # (K, n)
+    dist = np.stack([space.distances(c) for c in np.asarray(cells).tolist()])  # (K, n), cached per cell
+    dist = np.where(np.isfinite(dist), dist, 0.0)  # unreachable cells carry no mass
+    phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)
+    expected = np.zeros((len(cells), len(space.headings)))
+    for like in (lik, 1.0 - lik):  # the two gas outcomes: hit, miss
+        joint = q * like
+        z = joint.sum(axis=1)  # P(h | p, not found)
+        post_h = joint / np.where(z > 0, z, 1.0)[:, None]
+        h_bits = entr(post_h).sum(axis=1) / np.log(2)
+        d_h = (post_h * dist).sum(axis=1)
+        expected += z[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
+    return v_now - (1.0 - p_f[:, None]) * expected
+
+
+def choose(policy: str, sit: Situation) -> Decision:
+    """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
+    if policy == "greedy":
+        cells, drive, pred, tau = _candidates(sit)
+        target = int(np.argmax(sit.posterior))  # the MAP cell
+        d_target = np.array([sit.space.distances(c)[target] for c in cells.tolist()])
+        rank = np.lexsort((tau.min(axis=1), d_target))  # nearest to the MAP cell, then quickest
+        k = int(rank[0])
+        to = sit.space.position(target) - sit.space.position(cells[k])
+        heading = float(np.arctan2(to[1], to[0])) if np.hypot(*to) > 0 else sit.heading
+        return Decision(int(cells[k]), (heading,), sit.space.path(pred, int(cells[k])), float(drive[k]),
+                        float(-d_target[k]))
+    if policy == "infotaxis":
+        cells, drive, pred, tau = _candidates(sit)
+        return _best(score_per_time(infotaxis_gain(sit, cells), tau), cells, pred, drive, sit)
+    if policy == "space-aware-infotaxis":
+        cells, drive, pred, tau = _candidates(sit)
+        return _best(score_per_time(space_aware_gain(sit, cells), tau), cells, pred, drive, sit)
+    raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")

@@ -1,0 +1,215 @@
+"""Where the robot can go and what it can see from there: the free-space graph, candidate poses, and cached
+per-position views and geodesic distances.
+
+Candidate poses of a decision (issue 15, item 1): the cells of a fixed lattice (spacing ``spacing``) that are
+navigable and within ``horizon`` metres of the robot *along the free-space graph*, plus the robot's own
+cell, each with ``n_headings`` camera headings.
+
+Views: the camera sees F_p = field_of_view(p) ∩ free (what :meth:`psgsl_pgm.sim.Camera.visible` returns). The
+line of sight does not depend on the heading, so the cells in line of sight within range are computed once
+per position (a full circle) and split into the heading sectors by the same bearing test as
+:func:`psgsl_pgm.field_of_view`; the result is cached per position (walls do not move; the camera's
+occupancy is the same for every seed of the house).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+
+import numpy as np
+from scipy import ndimage as ndi
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+__all__ = ["FreeSpace"]
+
+_VIEW_CACHE: dict = {}  # (occupancy hash, camera, headings, cell) -> (flat cells, (n_headings, m) bool sectors)
+_VIEW_CACHE_MAX = 4096
+
+
+def _flat_graph(nav: np.ndarray, resolution: float):
+    """8-connected graph over row-major flat cell indices; only ``nav`` cells have edges; no corner cutting."""
+    h, w = nav.shape
+    flat = np.arange(nav.size).reshape(nav.shape)
+    rows, cols, wts = [], [], []
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        r0, r1 = max(0, -dr), h - max(0, dr)
+        c0, c1 = max(0, -dc), w - max(0, dc)
+        a = nav[r0:r1, c0:c1]
+        b = nav[r0 + dr : r1 + dr, c0 + dc : c1 + dc]
+        ok = a & b
+        if dr and dc:  # a diagonal step needs both side cells free
+            ok &= nav[r0 + dr : r1 + dr, c0:c1] & nav[r0:r1, c0 + dc : c1 + dc]
+        rows.append(flat[r0:r1, c0:c1][ok])
+        cols.append(flat[r0 + dr : r1 + dr, c0 + dc : c1 + dc][ok])
+        wts.append(np.full(int(ok.sum()), resolution * np.hypot(dr, dc)))
+    r, c, v = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
+    g = coo_matrix((np.concatenate([v, v]), (np.concatenate([r, c]), np.concatenate([c, r]))),
+                   shape=(nav.size, nav.size))
+    return g.tocsr()
+
+
+class FreeSpace:
+    """Navigation and view geometry of a house for the closed loop.
+
+    Parameters
+    ----------
+    house : psgsl_pgm.sim.House
+    camera : psgsl_pgm.sim.Camera
+    clearance : float, keyword-only
+        Minimum distance of the robot's cells from walls, furniture and windows, m (the tour's default).
+    spacing : float, keyword-only
+        Lattice spacing of candidate positions, m.
+    n_headings : int, keyword-only
+        Camera headings per candidate position, 2π k / n_headings.
+    distance_cache : int, keyword-only
+        Geodesic distance maps kept (one (H·W,) float64 per position).
+
+    Attributes
+    ----------
+    nav : (H, W) bool
+        Cells the robot may occupy.
+    graph : scipy.sparse.csr_matrix
+        Over row-major flat cell indices (edges only between ``nav`` cells), weights in metres.
+    headings : (n_headings,) ndarray
+    lattice : (H, W) bool
+        Navigable lattice cells (candidate positions).
+    """
+
+    def __init__(self, house, camera, *, clearance: float = 0.25, spacing: float = 0.5, n_headings: int = 8,
+                 distance_cache: int = 1024):
+        self.house = house
+        self.camera = camera
+        grid = house.grid
+        self.grid = grid
+        self.resolution = float(grid.resolution)
+        blocked = house.robot_obstacles
+        self.nav = ~blocked & (ndi.distance_transform_edt(~blocked) * self.resolution > clearance)
+        self.graph = _flat_graph(self.nav, self.resolution)
+        step = max(1, int(round(spacing / self.resolution)))
+        lat = np.zeros(self.nav.shape, bool)
+        lat[step // 2 :: step, step // 2 :: step] = True
+        self.lattice = lat & self.nav
+        self.headings = 2 * np.pi * np.arange(int(n_headings)) / int(n_headings)
+        self.centres = grid.cell_centres().reshape(-1, 2)
+        self.free = grid.free.ravel()
+        # geodesic distance to a non-navigable cell: via its nearest navigable cell, then straight
+        dist, (ri, ci) = ndi.distance_transform_edt(~self.nav, return_indices=True)
+        self._nearest_nav = (ri * self.nav.shape[1] + ci).ravel()
+        self._offset = np.linalg.norm(self.centres - self.centres[self._nearest_nav], axis=1)
+        self._dist_cache: OrderedDict = OrderedDict()
+        self._dist_cache_max = int(distance_cache)
+        occ = np.ascontiguousarray(grid.occupancy)
+        self._view_key = (hashlib.sha1(occ.tobytes()).hexdigest(), occ.shape, self.resolution,
+                          tuple(np.asarray(grid.origin, float).tolist()), float(camera.max_range),
+                          float(camera.min_range), float(camera.half_angle), int(n_headings),
+                          hashlib.sha1(np.ascontiguousarray(grid.free).tobytes()).hexdigest())
+
+    # --- cells and positions ------------------------------------------------------------------------------
+    def cell_of(self, xy) -> int:
+        """Flat index of the cell holding ``xy``."""
+        r, c = (int(v) for v in self.grid.world_to_cell(np.asarray(xy, dtype=np.float64)))
+        return r * self.nav.shape[1] + c
+
+    def snap(self, xy) -> int:
+        """Flat index of the navigable cell nearest to ``xy``."""
+        return int(self._nearest_nav[self.cell_of(xy)])
+
+    def position(self, cells) -> np.ndarray:
+        """(..., 2) cell centres of flat indices."""
+        return self.centres[np.asarray(cells)]
+
+    # --- geodesics ---------------------------------------------------------------------------------------
+    def reach(self, cell: int, horizon: float):
+        """Geodesic distances (H·W,) from ``cell`` (inf beyond ``horizon``) and Dijkstra predecessors."""
+        return dijkstra(self.graph, indices=int(cell), limit=float(horizon), return_predecessors=True)
+
+    @staticmethod
+    def path(pred: np.ndarray, target: int) -> np.ndarray:
+        """Flat cells from the Dijkstra source to ``target`` (inclusive), from the predecessor array."""
+        out = [int(target)]
+        while pred[out[-1]] >= 0:
+            out.append(int(pred[out[-1]]))
+        return np.array(out[::-1])
+
+    def distances(self, cell: int) -> np.ndarray:
+        """(H·W,) geodesic distance (m) from navigable ``cell`` to every cell (cached; inf if unreachable)."""
+        cell = int(cell)
+        d = self._dist_cache.get(cell)
+        if d is None:
+            on_graph = dijkstra(self.graph, indices=cell)
+            d = on_graph[self._nearest_nav] + self._offset
+            d.flags.writeable = False
+            self._dist_cache[cell] = d
+            if len(self._dist_cache) > self._dist_cache_max:
+                self._dist_cache.popitem(last=False)
+        else:
+            self._dist_cache.move_to_end(cell)
+        return d
+
+    def candidates(self, cell: int, horizon: float):
+        """Candidate positions of a decision at ``cell``.
+
+        Returns
+        -------
+        cells : (K,) ndarray of int
+            The navigable lattice cells within ``horizon`` (geodesic) other than the robot's own — the robot
+            always moves, as in the open-space POMDP (staying would repeat a gas reading that the estimators
+            treat as independent of the last one, an over-count the scoring per unit time would reward) —
+            or the robot's own cell alone when no other is within reach.
+        drive : (K,) ndarray
+            Their geodesic distances, m.
+        pred : (H·W,) ndarray
+            Dijkstra predecessors from ``cell`` (for :meth:`path`).
+        """
+        dist, pred = self.reach(cell, horizon)
+        lat = np.flatnonzero(self.lattice.ravel() & np.isfinite(dist))
+        cells = lat[lat != cell]
+        if cells.size == 0:
+            cells = np.array([int(cell)])
+        return cells, dist[cells], pred
+
+    # --- views -------------------------------------------------------------------------------------------
+    def view(self, cell: int):
+        """Cells the camera sees from ``cell``'s centre at each heading.
+
+        Returns
+        -------
+        flat : (m,) ndarray of int
+            Free cells in line of sight within the camera's range (any heading).
+        sectors : (n_headings, m) ndarray of bool
+            Which of them are inside the opening angle at each of :attr:`headings`.
+        """
+        key = self._view_key + (int(cell),)
+        hit = _VIEW_CACHE.get(key)
+        if hit is not None:
+            return hit
+        from .. import field_of_view
+
+        x, y = self.centres[int(cell)]
+        cam, g = self.camera, self.grid
+        seen = field_of_view(g.occupancy, (x, y, 0.0), max_range=cam.max_range, half_angle=np.pi,
+                             min_range=cam.min_range, resolution=g.resolution, origin=g.origin)
+        flat = np.flatnonzero(seen.ravel() & self.free)
+        w = self.nav.shape[1]
+        rows, cols = np.divmod(flat, w)
+        col0, row0 = (x - g.origin[0]) / g.resolution, (y - g.origin[1]) / g.resolution
+        dx, dy = (cols + 0.5 - col0) * g.resolution, (rows + 0.5 - row0) * g.resolution
+        angle = np.arctan2(dy, dx)
+        bearing = np.angle(np.exp(1j * (angle[None, :] - self.headings[:, None])))  # as in field_of_view
+        sectors = (np.abs(bearing) <= cam.half_angle) | (np.hypot(dx, dy) < 1e-12 * g.resolution)[None, :]
+        flat.flags.writeable = False
+        sectors.flags.writeable = False
+        if len(_VIEW_CACHE) >= _VIEW_CACHE_MAX:
+            _VIEW_CACHE.pop(next(iter(_VIEW_CACHE)))
+        _VIEW_CACHE[key] = (flat, sectors)
+        return flat, sectors
+
+    def view_gain(self, gain_flat: np.ndarray, cells) -> np.ndarray:
+        """φ_O = Σ_{n ∈ F_p} I(S; O_n) for every candidate cell × heading, (K, n_headings)."""
+        out = np.empty((len(cells), len(self.headings)))
+        for k, cell in enumerate(np.asarray(cells).tolist()):  # loop over candidate positions (tens)
+            flat, sectors = self.view(cell)
+            out[k] = sectors @ gain_flat[flat]
+        return out

@@ -1,0 +1,51 @@
+"""One ``.npz`` file per finished closed-loop run, written atomically — what makes ``psgsl search`` resumable."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..experiment._config import source_label
+from ._loop import SearchRun
+
+__all__ = ["load_search_run", "save_search_run", "search_run_path"]
+
+_ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
+           "region_area", "region_hit", "path", "final_posterior")
+
+
+def search_run_path(directory, source, policy: str, variant: str, estimator: str, seed: int) -> Path:
+    """``DIR/runs/<source>__<policy>__<variant>__<estimator>__seed<seed>.npz``."""
+    return Path(directory) / "runs" / f"{source_label(source)}__{policy}__{variant}__{estimator}__seed{int(seed)}.npz"
+
+
+def save_search_run(run: SearchRun, path) -> Path:
+    """Write ``run`` to ``path`` via a temporary file and ``os.replace`` (a killed run leaves no file)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    with open(tmp, "wb") as fh:
+        np.savez_compressed(
+            fh, source=np.array(run.source), seed=np.array(run.seed), policy=np.array(run.policy),
+            variant=np.array(run.variant), estimator=np.array(run.estimator), found=np.array(run.found),
+            time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
+            config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS})
+    os.replace(tmp, path)
+    return path
+
+
+def load_search_run(path) -> SearchRun:
+    """Read a run written by :func:`save_search_run` (ValueError naming the file if it is not one)."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in _ARRAYS}
+            return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
+                             str(z["estimator"]), arrays.pop("source_xy"), bool(z["found"]),
+                             float(z["time_to_find"]), float(z["geodesic"]), float(z["driven"]),
+                             config=json.loads(str(z["config"])), **arrays)
+    except (OSError, KeyError, ValueError, EOFError) as exc:
+        raise ValueError(f"{path} is not a search run file written by psgsl ({exc})") from None

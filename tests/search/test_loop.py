@@ -1,0 +1,116 @@
+"""The closed loop: the experiment's code path, the found rule, invariants of a run, storage and statistics."""
+
+import numpy as np
+import pytest
+
+from psgsl_pgm.search import SearchConfig, credible_region, paired_difference, run_closed_loop, survival, wilson_interval
+from psgsl_pgm.search._store import load_search_run, save_search_run
+
+
+def test_tour_in_the_closed_loop_is_the_validation_experiment(house_space):
+    """Same world, same stops: the closed loop's posterior is the experiment's (the per-step code is shared)."""
+    from psgsl_pgm.experiment import Tour, exploration_tour, run_search
+
+    house, space = house_space
+    run = run_closed_loop("oven", 0, "tour", "semantics+rooms", search=SearchConfig(time_budget=15.0), space=space)
+    m = run.n_steps  # the closed loop's stops are the tour's first m stops
+    assert m >= 3
+    full = exploration_tour(house)
+    short = Tour(full.stops[:m], full.headings[:m], full.path, full.distance[:m], full.waypoint[:m],
+                 full.path_index[:m])
+    ref = run_search("oven", 0, "infotaxis", tour=short, snapshot_at=(1.0,))
+    np.testing.assert_array_equal(run.final_posterior, ref.snapshots[m][2].astype(np.float32))
+    np.testing.assert_array_equal(run.time, ref.time)
+    np.testing.assert_array_equal(run.position[1:], ref.position[1:])
+    np.testing.assert_array_equal(run.hit, ref.hit)
+    # the metric itself is evaluated on a (1, H, W) instead of a (3, H, W) stack: BLAS rounding only
+    np.testing.assert_allclose(run.error, ref.error[:, 2], rtol=1e-12)
+    np.testing.assert_allclose(run.spread, ref.spread[:, 2], rtol=1e-12)
+
+
+@pytest.mark.slow
+def test_a_short_infotaxis_run_is_consistent(house_space):
+    _, space = house_space
+    search = SearchConfig(time_budget=25.0)
+    run = run_closed_loop("oven", 1, "infotaxis", "semantics+rooms", search=search, space=space)
+    n = run.n_steps + 1
+    for a in (run.time, run.heading, run.hit, run.path_length, run.error, run.map_error, run.spread,
+              run.region_area, run.region_hit):
+        assert a.shape == (n,)
+    assert np.all(np.diff(run.time) > 0) and np.all(np.diff(run.path_length) >= 0)
+    steps = np.linalg.norm(np.diff(run.position[1:], axis=0), axis=1)
+    assert np.all(steps > 0) and np.all(steps <= search.horizon + 1e-9)  # the robot moves, within the horizon
+    cells = [space.cell_of(p) for p in run.position[1:]]
+    assert space.nav.ravel()[cells].all()
+    assert not run.found and run.time_to_find == 25.0 and run.time[-2] < 25.0
+    assert run.final_posterior.dtype == np.float32
+    assert abs(float(run.final_posterior.sum(dtype=np.float64)) - 1) < 1e-5
+    assert run.driven == pytest.approx(run.path_length[-1])
+
+
+def test_found_on_the_way_within_the_radius(house_space):
+    _, space = house_space
+    run = run_closed_loop("2.3,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0),
+                          space=space)
+    assert run.found
+    d = np.linalg.norm(run.path - run.source_xy, axis=1)
+    assert d[-1] <= 0.5 < d[:-1].min()  # the path stops where it first comes within the radius
+    assert run.time_to_find > run.time[-1]  # found while driving after the last stop
+    assert run.path_ratio >= 1.0 - 1e-9
+
+
+def test_store_round_trip(tmp_path, house_space):
+    _, space = house_space
+    run = run_closed_loop("oven", 2, "greedy", "olfaction", search=SearchConfig(time_budget=8.0),
+                          space=space)
+    back = load_search_run(save_search_run(run, tmp_path / "r.npz"))
+    for name in ("time", "position", "error", "region_hit", "path", "final_posterior"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(run, name))
+    assert (back.found, back.time_to_find, back.config, back.policy) == (run.found, run.time_to_find, run.config,
+                                                                         run.policy)
+    with pytest.raises(ValueError, match="not a search run"):
+        load_search_run(tmp_path / "missing.npz")
+
+
+def test_credible_region_is_the_smallest_set():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        p = rng.dirichlet(np.full(12, 0.3)).reshape(3, 4)
+        region = credible_region(p, 0.9)
+        assert p[region].sum() >= 0.9 - 1e-12
+        srt = np.sort(p.ravel())[::-1]
+        k = int(np.argmax(np.cumsum(srt) >= 0.9 - 1e-12)) + 1  # brute force: fewest cells reaching 0.9
+        assert region.sum() == k
+    with pytest.raises(ValueError):
+        credible_region([0.5, 0.5], 1.0)
+
+
+def test_wilson_paired_and_survival():
+    lo, hi = wilson_interval(8, 10)
+    assert (round(lo, 4), round(hi, 4)) == (0.4902, 0.9433)
+    assert wilson_interval(0, 10)[0] == 0.0 and wilson_interval(10, 10)[1] == 1.0
+    d = paired_difference([10.0, 20.0, 30.0], [12.0, 25.0, 30.0])
+    assert d["mean"] == pytest.approx(-7 / 3) and d["n"] == 3
+    s = survival([10.0, 50.0, 1000.0], [True, True, False], [0.0, 10.0, 49.9, 50.0, 1000.0])
+    np.testing.assert_allclose(s, [1.0, 2 / 3, 2 / 3, 1 / 3, 1 / 3])
+
+
+@pytest.mark.parametrize("kwargs, exc", [
+    (dict(policy="random"), ValueError),
+    (dict(variant="rooms"), ValueError),
+    (dict(estimator="x"), ValueError),
+    (dict(seed=1.5), TypeError),
+])
+def test_bad_arguments(kwargs, exc):
+    args = dict(source="oven", seed=0, policy="tour", variant="olfaction", estimator="infotaxis") | kwargs
+    with pytest.raises(exc):
+        run_closed_loop(**args)
+
+
+def test_search_config_is_validated():
+    with pytest.raises(ValueError, match="found_radius"):
+        SearchConfig(found_radius=0)
+    with pytest.raises(TypeError, match="time_budget"):
+        SearchConfig(time_budget="long")
+    with pytest.raises(ValueError, match="start"):
+        SearchConfig(start=(1.0,))

@@ -1,0 +1,160 @@
+"""The pose-scoring rule, candidate poses, cached views and geodesics, and the policies' gains."""
+
+import numpy as np
+import pytest
+from scipy.sparse.csgraph import dijkstra
+from scipy.special import entr
+
+from psgsl_pgm import view_information_gain
+from psgsl_pgm.search import Situation, score_per_time, travel_time
+from psgsl_pgm.search._policies import infotaxis_gain, space_aware_gain
+
+
+def test_travel_time_counts_drive_turn_and_reading():
+    tau = travel_time([0.5, 2.0], [np.pi, -np.pi / 2], speed=0.25, turn_time=1.0, sense_time=1.0)
+    np.testing.assert_allclose(tau, [0.5 / 0.25 + 2.0 + 1.0, 2.0 / 0.25 + 1.0 + 1.0], rtol=1e-15)
+
+
+def test_score_is_gain_per_unit_time():
+    # a near pose with gain g (τ = 3 s) beats a far one with 2g (τ = 9 s); a loss is worse when it takes longer
+    score = score_per_time([0.1, 0.2, -0.1, -0.1], [3.0, 9.0, 3.0, 9.0])
+    np.testing.assert_allclose(score, [0.1 / 3, 0.2 / 9, -0.3, -0.9], rtol=1e-15)
+    assert np.argmax(score) == 0
+    with pytest.raises(ValueError, match="positive"):
+        score_per_time([0.1], [0.0])
+
+
+def test_candidates_are_lattice_cells_within_the_geodesic_horizon(house_space):
+    _, space = house_space
+    cell = space.snap((3.0, 6.0))
+    cells, drive, pred = space.candidates(cell, 2.0)
+    full = dijkstra(space.graph, indices=cell)
+    expect = np.flatnonzero(space.lattice.ravel() & (full <= 2.0))
+    np.testing.assert_array_equal(np.sort(cells), np.sort(expect[expect != cell]))
+    np.testing.assert_allclose(drive, full[cells], rtol=1e-12)
+    for c in cells[:5]:
+        path = space.path(pred, c)
+        assert path[0] == cell and path[-1] == c
+        steps = np.linalg.norm(np.diff(space.position(path), axis=0), axis=1)
+        assert steps.sum() == pytest.approx(full[c], rel=1e-12)
+        assert space.nav.ravel()[path].all()
+
+
+def test_geodesic_distances_match_dijkstra_on_drivable_cells(house_space):
+    _, space = house_space
+    cell = space.snap((6.0, 3.0))
+    d = space.distances(cell)
+    full = dijkstra(space.graph, indices=cell)
+    nav = space.nav.ravel()
+    np.testing.assert_allclose(d[nav], full[nav], rtol=1e-12)
+    assert d is space.distances(cell)  # cached
+
+
+def test_cached_views_are_the_cameras_field_of_view(house_space):
+    house, space = house_space
+    from psgsl_pgm.sim import Camera
+
+    cam = Camera()
+    for xy in ((3.05, 6.05), (7.05, 2.05)):
+        cell = space.snap(xy)
+        flat, sectors = space.view(cell)
+        x, y = space.position(cell)
+        for h, heading in enumerate(space.headings[:4]):
+            seen = np.zeros(house.shape, bool).ravel()
+            seen[flat[sectors[h]]] = True
+            np.testing.assert_array_equal(seen.reshape(house.shape), cam.visible(house.grid, (x, y, heading)))
+
+
+def test_view_gain_is_view_information_gain(house_space):
+    house, space = house_space
+    from psgsl_pgm.sim import Camera
+
+    cam = Camera()
+    gain = np.random.default_rng(0).random(house.shape) * house.grid.free  # the camera observes free cells
+    cells = np.array([space.snap((3.05, 6.05)), space.snap((2.05, 9.05))])
+    phi = space.view_gain(gain.ravel(), cells)
+    for k, c in enumerate(cells):
+        x, y = space.position(c)
+        poses = np.array([(x, y, h) for h in space.headings])
+        ref = view_information_gain(gain, house.grid.occupancy, poses, max_range=cam.max_range,
+                                    half_angle=cam.half_angle, min_range=cam.min_range,
+                                    resolution=house.grid.resolution, origin=house.grid.origin)
+        np.testing.assert_allclose(phi[k], ref, rtol=1e-10)
+
+
+@pytest.fixture(scope="module")
+def situation(house_space):
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.experiment._step import VariantPosteriors, visit
+    from psgsl_pgm.sim import make_world
+
+    house, space = house_space
+    config = ExperimentConfig()
+    world = make_world(house, seed=0, warm_up=20.0)
+    beliefs = VariantPosteriors(world, "infotaxis", config)
+    cell = space.snap((3.0, 6.0))
+    stop = space.position(cell)
+    reading, wind, frames = visit(world, stop, (0.0, np.pi), config)
+    beliefs.observe(stop, reading, wind, frames)
+    post = beliefs.posteriors(("semantics+rooms",))[0]
+    return Situation(post, beliefs, "semantics+rooms", space, cell, np.pi, config.speed, config.turn_time, 1.0,
+                     2.0, 0.5)
+
+
+def test_infotaxis_gain_is_found_term_plus_phi_g_plus_phi_o(situation):
+    from psgsl_pgm import semantic_information_gain
+
+    sit = situation
+    space, b = sit.space, sit.beliefs
+    cells, _, _ = space.candidates(sit.cell, sit.horizon)
+    cells = cells[:3]
+    got = infotaxis_gain(sit, cells)
+    xy = space.position(cells)
+    # φ_G: I(S; hit) under the fused posterior, written out
+    p_hit = b.estimator.hit_probability(xy).reshape(len(cells), -1)
+    post = sit.posterior.ravel()
+    p_bar = p_hit @ post
+    phi_g = entr(p_bar) + entr(1 - p_bar) - (entr(p_hit) + entr(1 - p_hit)) @ post
+    np.testing.assert_allclose(b.estimator.information_gain(xy, posterior=sit.posterior), phi_g, rtol=1e-10)
+    info = semantic_information_gain(b.maps["semantics+rooms"].probs, b.likelihood, b.class_prior,
+                                     olfactory=b.estimator.posterior, predictive="exact")
+    g = space.grid
+    cam = space.camera
+    h_s = float(entr(post).sum())
+    for k, c in enumerate(cells):
+        d = np.linalg.norm(space.centres - xy[k], axis=1)
+        p_f = post[d <= 0.5].sum()
+        poses = np.array([(xy[k][0], xy[k][1], h) for h in space.headings])
+        phi_o = view_information_gain(info * g.free, g.occupancy, poses, max_range=cam.max_range,
+                                      half_angle=cam.half_angle, min_range=cam.min_range,
+                                      resolution=g.resolution, origin=g.origin)
+        np.testing.assert_allclose(got[k], p_f * h_s + (1 - p_f) * (phi_g[k] + phi_o), rtol=1e-9)
+
+
+def test_olfaction_variant_has_no_view_term(situation):
+    sit = situation
+    cells, _, _ = sit.space.candidates(sit.cell, sit.horizon)
+    olf = Situation(**{**sit.__dict__, "variant": "olfaction"})
+    got = infotaxis_gain(olf, cells[:4])
+    np.testing.assert_allclose(got, got[:, :1] * np.ones((1, got.shape[1])), rtol=0, atol=0)
+
+
+def test_space_aware_gain_on_a_certain_belief_is_the_drive_saved(situation):
+    """All the mass on one cell: H = 0, so V = log2(D/ℓ) (ℓ = 1 m) and a nearer pose gains log2(D_now/D_p);
+    a pose within the found radius gains all of V_now."""
+    sit = situation
+    space = sit.space
+    target = space.snap((4.55, 6.05))
+    post = np.zeros(sit.posterior.size)
+    post[target] = 1.0
+    olf = Situation(**{**sit.__dict__, "variant": "olfaction", "posterior": post.reshape(sit.posterior.shape)})
+    cells, _, _ = space.candidates(sit.cell, sit.horizon)
+    got = space_aware_gain(olf, cells)
+    d_now = space.distances(sit.cell)[target]
+    for k, c in enumerate(cells):
+        d = space.distances(c)[target]
+        if np.hypot(*(space.position(c) - space.position(target))) <= 0.5:
+            expect = np.log2(d_now)  # found there: the rest costs nothing
+        else:
+            expect = np.log2(d_now) - np.log2(d)
+        np.testing.assert_allclose(got[k], expect, rtol=1e-9)
