@@ -60,6 +60,18 @@ def _demo(args) -> int:
     print(format_table(summary, title="olfaction (grid Infotaxis) vs + camera semantics vs + room categories"))
     print(f"written to {args.out}: summary.json, summary.txt, metrics.csv, error-chart.png, progression.png, "
           "room-types.png, runs/")
+    if not args.no_search:
+        from pathlib import Path
+
+        from ._cli_search import format_search_table
+        from .search import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
+
+        out = Path(args.out) / "closed-loop"
+        print(f"closed loop: the robot chooses where to go and look (infotaxis, φ = φ_G + φ_O), with and without "
+              f"semantics, seed(s) {list(DEMO_SEARCH_SEEDS)}, {DEMO_BUDGET:g} s budget -> {out}", flush=True)
+        search = run_search_demo(out, workers=args.workers, progress=not args.quiet)
+        print(format_search_table(search))
+        print(f"written to {out}: summary.json, runs.csv, oven-infotaxis/ (survival.png, paths.png, ...), runs/")
     return 0
 
 
@@ -210,7 +222,7 @@ def _workers(text):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import _cli_world
+    from . import _cli_search, _cli_world
     from ._cli_grid import add_scheduler_argument
     from .experiment import ESTIMATORS
 
@@ -225,6 +237,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--workers", type=_workers, default=workers,
                       help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    demo.add_argument("--no-search", action="store_true", help="skip the closed-loop comparison")
     demo.set_defaults(func=_demo)
 
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
@@ -262,6 +275,7 @@ def build_parser() -> argparse.ArgumentParser:
     kitchen.set_defaults(func=_kitchen)
     _cli_world.add_parser(sub)
     _cli_export.add_parser(sub)
+    _cli_search.add_parser(sub)
     return parser
 
 

@@ -8,7 +8,8 @@ camera frames; three variants turn it into a source distribution (:data:`VARIANT
 * ``semantics`` — fused with the semantic term p(s | z) of class beliefs built from the camera;
 * ``semantics+rooms`` — the same, with class beliefs that start from the room-category map.
 
-:func:`run_search` runs one search; :func:`run_experiment` a grid of sources × seeds × estimators (parallel,
+:func:`run_search` runs one search (its per-step code, :class:`VariantPosteriors` and :func:`visit`, is also
+the closed loop's, :mod:`psgsl_pgm.search`); :func:`run_experiment` a grid of sources × seeds × estimators (parallel,
 resumable); :func:`run_demo` the command ``psgsl demo``.
 """
 
@@ -20,6 +21,7 @@ from ._metrics import error_and_spread, mean_ci
 from ._ontology import house_ontology
 from ._run import RunResult, run_search
 from ._sources import check_sources
+from ._step import VariantPosteriors, visit
 from ._store import load_run, save_run
 from ._summary import format_table, summarize
 from ._tour import Tour, exploration_tour
@@ -32,6 +34,7 @@ __all__ = [
     "RunResult",
     "Tour",
     "VARIANTS",
+    "VariantPosteriors",
     "calibrate_encounter_scale",
     "check_sources",
     "error_and_spread",
@@ -49,5 +52,6 @@ __all__ = [
     "run_search",
     "save_run",
     "summarize",
+    "visit",
     "write_outputs",
 ]

@@ -3,13 +3,19 @@
 experiment's own per-step code, declarations with credible regions, and the open-space benchmark.
 """
 
+from ._demo import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
+from ._figures import plot_paths, plot_survival
+from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._loop import SearchConfig, SearchRun, run_closed_loop
 from ._metrics import credible_region, paired_difference, survival, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
 from ._policies import POLICIES, Decision, Situation, choose, score_per_time, travel_time
 from ._space import FreeSpace
+from ._store import load_search_run, save_search_run
 
 __all__ = [
+    "DEMO_BUDGET",
+    "DEMO_SEARCH_SEEDS",
     "Decision",
     "FreeSpace",
     "OPEN_SPACE_POLICIES",
@@ -22,11 +28,19 @@ __all__ = [
     "credible_region",
     "grid_size",
     "hit_probability",
+    "load_search_run",
     "open_space_benchmark",
     "paired_difference",
+    "plot_paths",
+    "plot_survival",
     "run_closed_loop",
+    "run_search_demo",
+    "run_search_grid",
+    "save_search_run",
     "score_per_time",
+    "summarize_runs",
     "survival",
     "travel_time",
     "wilson_interval",
+    "write_search_outputs",
 ]

@@ -89,9 +89,20 @@ def _paired(groups: dict) -> dict:
     return out
 
 
+def _finite(obj):
+    """NaN (no interval from one run) -> None, so that the files are strict JSON."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
 def _write_json(obj, path: Path) -> None:
     tmp = path.with_name(path.name + ".part")
-    tmp.write_text(json.dumps(obj, indent=2, sort_keys=True) + "\n", encoding="utf-8")
+    tmp.write_text(json.dumps(_finite(obj), indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
     os.replace(tmp, path)
 
 
@@ -131,7 +142,7 @@ def write_search_outputs(out, *, figures: bool = True) -> dict:
         by_key = {k: sorted(by_key[k], key=lambda r: r.seed) for k in sorted(by_key, key=order.get)}
         folder = out / f"{source_label(source)}-{estimator}"
         folder.mkdir(parents=True, exist_ok=True)
-        summary = {k: summarize_runs(v) for k, v in by_key.items()}
+        summary = _finite({k: summarize_runs(v) for k, v in by_key.items()})
         _write_json(summary, folder / "summary.json")
         _write_json(_paired(by_key), folder / "paired.json")
         _write_csv([r for v in by_key.values() for r in v], folder / "runs.csv")
@@ -155,11 +166,35 @@ def write_search_outputs(out, *, figures: bool = True) -> dict:
     return top
 
 
+def _check_sources(sources) -> None:
+    """Fail before any work: a class name must have an object in the house, a position must be a free cell."""
+    from ..sim import default_house
+
+    house = default_house(0)
+    for spec in sources:
+        spec = parse_source(spec)
+        if isinstance(spec, str):
+            if not house.objects_of_class(spec):
+                raise ValueError(f"source class {spec!r} has no object in the house; classes present: "
+                                 f"{sorted({o.class_name for o in house.objects})}")
+            continue
+        r, c = (int(v) for v in house.grid.world_to_cell(np.asarray(spec, dtype=np.float64)))
+        if not (0 <= r < house.shape[0] and 0 <= c < house.shape[1]) or not house.grid.free[r, c]:
+            raise ValueError(f"source position {spec} must be a free point of the house (x in [0, "
+                             f"{house.shape[1] * house.grid.resolution:g}], y in [0, "
+                             f"{house.shape[0] * house.grid.resolution:g}] m)")
+
+
 def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=("olfaction", "semantics+rooms"),
                     estimators=("infotaxis",), seeds=range(10), *, out, workers: int = 2,
                     config: ExperimentConfig | None = None, search: SearchConfig | None = None,
-                    progress: bool = True, figures: bool = True) -> dict:
+                    progress: bool = True, figures: bool = True, grid=None) -> dict:
     """Run every (source, policy, variant, estimator, seed) not yet on disk, then aggregate ``out``.
+
+    Jobs are submitted seed by seed (all combinations of seed 0, then of seed 1, …), so that an interrupted grid
+    leaves every combination with about the same number of seeds. ``grid`` (keyword-only) replaces the full
+    product by an explicit sequence of ``(source, policy, variant, estimator, seed)`` tuples, run in that order
+    (e.g. the tour with one variant only: its path does not depend on the variant).
 
     Finished runs live in ``out/runs`` (one atomic file each) and are never redone; a stored run with another
     configuration is an error. Aggregation covers every run stored in ``out/runs``
@@ -178,11 +213,21 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
         raise ValueError("need at least one source, policy, variant, estimator and seed")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    _check_sources({g[0] for g in grid} if grid is not None else set(sources))
     out = Path(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     want = _config_of(config, search)
+    if grid is None:
+        grid = [(so, p, v, e, se) for se, so, p, v, e in itertools.product(seeds, sources, policies, variants,
+                                                                           estimators)]
+    else:
+        grid = [(parse_source(so), p, v, e, int(se)) for so, p, v, e, se in grid]
+        for _, p, v, e, _ in grid:
+            if p not in POLICIES or v not in VARIANTS or e not in ESTIMATORS:
+                raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
+                                 f"estimator of {ESTIMATORS}, got {(p, v, e)}")
     jobs = []
-    for source, policy, variant, estimator, seed in itertools.product(sources, policies, variants, estimators, seeds):
+    for source, policy, variant, estimator, seed in grid:
         path = search_run_path(out, source, policy, variant, estimator, seed)
         if path.exists():
             stored = load_search_run(path).config

@@ -18,7 +18,7 @@ from psgsl_pgm.experiment import VARIANTS, mean_ci
 @pytest.fixture(scope="module")
 def demo_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo")
-    assert main(["demo", "--seeds", "2", "--workers", "2", "--out", str(out), "--quiet"]) == 0
+    assert main(["demo", "--seeds", "2", "--workers", "2", "--out", str(out), "--quiet", "--no-search"]) == 0
     return out
 
 

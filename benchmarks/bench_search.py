@@ -1,0 +1,97 @@
+"""Closed-loop search speed (issue 15, item 7), as ratios to one semantic-term evaluation measured in the same
+process (not a test).
+
+* one decision: ``choose("infotaxis", ...)`` for ``semantics+rooms`` on the embedded house — φ_G (one I(S; hit)
+  per candidate position, under the fused posterior) + φ_O (semantic_information_gain over the map, summed
+  over the field of view of every candidate pose) over every candidate pose within the 2-m horizon — median
+  over repeats with warm caches (views and Green's rows depend on the geometry only), and the first (cold)
+  decision;
+* one semantic-term evaluation p(s | z) on the same map (eq. ``prob-semantics-final``): the unit of the ratio;
+* one 1000-s house episode (``infotaxis/semantics+rooms``, never found: found_radius = 1 mm) wall time, and its
+  split into gas simulation and the rest.
+
+Run: ``python benchmarks/bench_search.py [--repeats 20] [--no-episode]`` on an otherwise idle core.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+
+def _median_ms(fn, repeats):
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--repeats", type=int, default=20)
+    ap.add_argument("--no-episode", action="store_true")
+    a = ap.parse_args(argv)
+
+    from psgsl_pgm import semantic_source_probability
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.experiment._step import VariantPosteriors, visit
+    from psgsl_pgm.search import FreeSpace, SearchConfig, Situation, choose, run_closed_loop
+    from psgsl_pgm.sim import make_world
+
+    config = ExperimentConfig()
+    world = make_world(seed=0, source="oven", warm_up=config.warm_up)
+    space = FreeSpace(world.house, world.camera)
+    beliefs = VariantPosteriors(world, "infotaxis", config)
+    cell = space.snap((3.0, 6.0))
+    stop = space.position(cell)
+    reading, wind, frames = visit(world, stop, (0.0, np.pi / 2, np.pi, 1.5 * np.pi), config)
+    beliefs.observe(stop, reading, wind, frames)
+    post = beliefs.posteriors(("semantics+rooms",))[0]
+    sit = Situation(post, beliefs, "semantics+rooms", space, cell, 0.0, config.speed, config.turn_time,
+                    world.gas_sensor.window, 2.0, 0.5)
+    n_cand = len(space.candidates(cell, 2.0)[0])
+    t0 = time.perf_counter()
+    choose("infotaxis", sit)
+    cold = 1e3 * (time.perf_counter() - t0)
+    decision = _median_ms(lambda: choose("infotaxis", sit), a.repeats)
+    sap = _median_ms(lambda: choose("space-aware-infotaxis", sit), a.repeats)
+    m = beliefs.maps["semantics+rooms"]
+    unit = _median_ms(lambda: semantic_source_probability(m.probs, beliefs.likelihood, beliefs.class_prior), a.repeats)
+    print(f"house grid {world.house.shape}, {n_cand} candidate positions × {len(space.headings)} headings")
+    print(f"one semantic term p(s | z):              {unit:8.2f} ms (median)")
+    print(f"one infotaxis decision (φ_G + φ_O), warm: {decision:8.2f} ms = {decision / unit:6.1f} semantic terms")
+    print(f"one space-aware decision, warm:          {sap:8.2f} ms = {sap / unit:6.1f} semantic terms")
+    print(f"first decision (views computed), cold:   {cold:8.2f} ms = {cold / unit:6.1f} semantic terms")
+    if not a.no_episode:
+        from psgsl_pgm.sim import _filaments
+
+        spent = [0.0]
+        step = _filaments.FilamentModel.step
+
+        def timed(self, *args, **kw):
+            t = time.perf_counter()
+            try:
+                return step(self, *args, **kw)
+            finally:
+                spent[0] += time.perf_counter() - t
+
+        _filaments.FilamentModel.step = timed
+        try:
+            t0 = time.perf_counter()
+            run = run_closed_loop("oven", 0, "infotaxis", "semantics+rooms", search=SearchConfig(found_radius=1e-3),
+                                  space=space)
+            wall = time.perf_counter() - t0
+        finally:
+            _filaments.FilamentModel.step = step
+        print(f"one {run.time_to_find:.0f}-s episode ({run.n_steps} stops): {wall:6.1f} s wall, of which gas "
+              f"simulation {spent[0]:5.1f} s ({spent[0] / wall:.0%}); {wall / unit * 1e3:,.0f} semantic terms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,135 @@
+"""``psgsl search``: the closed-loop grid in the simulated house, or (``--open-space``) the open-space benchmark."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+__all__ = ["add_parser", "run"]
+
+_SETTINGS = ((1.0, 1.0), (2.0, 2.0), (3.0, 1.0))
+
+
+def _positive_int(text):
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _positive_float(text):
+    import argparse
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def add_parser(subparsers):
+    """Register ``psgsl search``."""
+    from .experiment import ESTIMATORS, VARIANTS
+    from .search import OPEN_SPACE_POLICIES, POLICIES
+
+    workers = min(2, os.cpu_count() or 1)
+    p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
+                              "or --open-space: the Loisy & Eloy benchmark")
+    p.add_argument("--sources", nargs="+", default=["oven", "bed", "5.0,6.0"],
+                   help="object class names or 'x,y' positions (default: %(default)s)")
+    p.add_argument("--policies", nargs="+", choices=POLICIES, default=["tour", "infotaxis", "space-aware-infotaxis"],
+                   help="policies (default: %(default)s)")
+    p.add_argument("--variants", nargs="+", choices=VARIANTS, default=["olfaction", "semantics+rooms"],
+                   help="information variants (default: %(default)s)")
+    p.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis"],
+                   help="olfactory estimators (default: %(default)s)")
+    p.add_argument("--seeds", type=_positive_int, default=10, help="seeds 0..N-1 (default: %(default)s)")
+    p.add_argument("--budget", type=_positive_float, default=1000.0,
+                   help="time budget per run, s of simulated time (default: %(default)s)")
+    p.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--open-space", action="store_true",
+                   help="run the open-space benchmark instead (writes OUT/open_space.json)")
+    p.add_argument("--open-policies", nargs="+", choices=OPEN_SPACE_POLICIES,
+                   default=["infotaxis", "space-aware-infotaxis"], help="open-space policies (default: %(default)s)")
+    p.add_argument("--episodes", type=_positive_int, default=1000,
+                   help="open-space episodes per policy and setting (default: %(default)s)")
+    p.add_argument("--setting", nargs=2, type=_positive_float, action="append", metavar=("LAMBDA_OVER_DX", "R_DT"),
+                   help="open-space setting (repeatable; default: (1, 1), (2, 2), (3, 1))")
+    p.set_defaults(func=run)
+    return p
+
+
+def _open_space(args) -> int:
+    from .search import open_space_benchmark
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for lam, r in args.setting or _SETTINGS:
+        for pol in args.open_policies:
+            res = open_space_benchmark(pol, lambda_over_dx=lam, r_dt=r, episodes=args.episodes, seed=0)
+            res = {k: (v.tolist() if hasattr(v, "tolist") else v) for k, v in res.items()}
+            rows.append(res)
+            print(f"{pol:>22}  λ/Δx = {lam:g}, R·Δt = {r:g}, N = {res['n']}: mean T = {res['mean_steps']:.2f} "
+                  f"± {res['sem']:.2f} (s.e., {res['episodes']} episodes), median {res['median']:g}, "
+                  f"P(not found) = {res['p_not_found']:.3g}", flush=True)
+    path = out / "open_space.json"
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    print(f"written to {path}")
+    return 0
+
+
+def format_search_table(summary: dict) -> str:
+    """One line per ``"<policy>/<variant>"``: success rate [Wilson 95 %], time to find mean [95 % CI], median."""
+    lines = [f"{'policy/variant':<36} {'success [95% CI]':>22} {'time to find, s: mean [95% CI]':>34} {'median':>7} "
+             f"{'cov90':>6} {'n':>3}"]
+    for key, s in summary.items():
+        sr, t = s["success_rate"], s["time_to_find"]
+        lines.append(f"{key:<36} {sr['value']:6.2f} [{sr['ci95'][0]:.2f}, {sr['ci95'][1]:.2f}]      "
+                     f"{t['mean']:8.1f} [{t['ci95'][0]:7.1f}, {t['ci95'][1]:7.1f}]          {t['median']:7.1f} "
+                     f"{s['coverage90']:6.2f} {s['n_runs']:3d}")
+    lines.append("(runs not found count at the budget)")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """Run ``psgsl search``; returns the exit code (bad input: one line on stderr, exit 2)."""
+    from ._cli import _UsageError
+
+    try:
+        return _run(args)
+    except (ValueError, TypeError) as exc:  # the library's messages name what was expected and what arrived
+        raise _UsageError(str(exc)) from None
+
+
+def _run(args) -> int:
+    if args.open_space:
+        return _open_space(args)
+    from .experiment import parse_source
+    from .search import SearchConfig
+    from .search._grid import run_search_grid
+
+    sources = [parse_source(s) for s in args.sources]  # ValueError -> one line, exit 2 (central mapping)
+    summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),
+                                out=args.out, workers=args.workers, search=SearchConfig(time_budget=args.budget),
+                                progress=not args.quiet, figures=not args.no_figures)
+    for key, summary in summaries.items():
+        print(f"source/estimator {key}")
+        print(format_search_table(summary))
+        print()
+    print(f"written to {args.out}: summary.json, runs.csv, one folder per source and estimator (summary.json, "
+          "paired.json, runs.csv, survival.png, paths.png), runs/")
+    return 0

@@ -1,0 +1,58 @@
+"""``psgsl search``: outputs, summary.json layout, resumability, the open-space benchmark, bad input."""
+
+import json
+
+import pytest
+
+from psgsl_pgm._cli import main
+
+
+def test_search_grid_writes_summary_csv_figures_and_resumes(tmp_path, capsys):
+    out = tmp_path / "s"
+    argv = ["search", "--sources", "oven", "--policies", "tour", "greedy", "--variants", "olfaction",
+            "--seeds", "2", "--budget", "12", "--workers", "1", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    top = json.loads((out / "summary.json").read_text())
+    group = json.loads((out / "oven-infotaxis" / "summary.json").read_text())
+    assert top == {"oven/infotaxis": group}
+    assert set(group) == {"tour/olfaction", "greedy/olfaction"}
+    entry = group["greedy/olfaction"]
+    assert set(entry["success_rate"]) == {"value", "ci95"}
+    assert {"mean", "ci95", "median"} <= set(entry["time_to_find"])
+    assert set(entry["path_ratio"]) == {"mean", "ci95"}
+    assert entry["n_runs"] == 2 and 0.0 <= entry["coverage90"] <= 1.0
+    rows = (out / "runs.csv").read_text().splitlines()
+    assert len(rows) == 1 + 4 and rows[0].startswith("source,estimator,policy,variant,seed,found")
+    for name in ("survival.png", "paths.png", "paired.json", "runs.csv"):
+        assert (out / "oven-infotaxis" / name).stat().st_size > 0
+    stamps = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    assert len(stamps) == 4
+    assert main(argv) == 0  # resumed: nothing recomputed
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
+    assert "tour/olfaction" in capsys.readouterr().out
+
+
+def test_open_space_from_the_command_line(tmp_path, capsys):
+    argv = ["search", "--open-space", "--setting", "1", "1", "--episodes", "3", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    rows = json.loads((tmp_path / "open_space.json").read_text())
+    assert [r["policy"] for r in rows] == ["infotaxis", "space-aware-infotaxis"]
+    assert all(r["n"] == 19 and len(r["steps"]) == 3 for r in rows)
+    assert "mean T" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [
+    ["search", "--sources", "piano", "--seeds", "1", "--budget", "5", "--policies", "tour"],
+    ["search", "--sources", "99,99", "--seeds", "1"],
+    ["search", "--sources", "1,2,3"],
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv):
+    assert main(argv + ["--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("psgsl search: error:")
+
+
+def test_bad_option_values_are_refused(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["search", "--budget", "-1"])
+    assert exc.value.code == 2
