@@ -69,7 +69,10 @@ def _demo(args) -> int:
         out = Path(args.out) / "closed-loop"
         print(f"closed loop: the robot chooses where to go and look (infotaxis, φ = φ_G + φ_O), with and without "
               f"semantics, seed(s) {list(DEMO_SEARCH_SEEDS)}, {DEMO_BUDGET:g} s budget -> {out}", flush=True)
-        search = run_search_demo(out, workers=args.workers, progress=not args.quiet)
+        try:
+            search = run_search_demo(out, workers=args.workers, progress=not args.quiet)
+        except GridInterrupted as exc:
+            return interrupted(args, exc, where=os.path.join(out, "runs"))
         print(format_search_table(search))
         print(f"written to {out}: summary.json, runs.csv, oven-infotaxis/ (survival.png, paths.png, ...), runs/")
     return 0

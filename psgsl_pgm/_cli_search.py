@@ -37,6 +37,7 @@ def _positive_float(text):
 
 def add_parser(subparsers):
     """Register ``psgsl search``."""
+    from ._cli_grid import add_scheduler_argument
     from .experiment import ESTIMATORS, VARIANTS
     from .search import OPEN_SPACE_POLICIES, POLICIES
 
@@ -55,6 +56,7 @@ def add_parser(subparsers):
     p.add_argument("--budget", type=_positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
     p.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
@@ -118,14 +120,19 @@ def run(args) -> int:
 def _run(args) -> int:
     if args.open_space:
         return _open_space(args)
+    from ._cli_grid import interrupted
+    from ._grid_runner import GridInterrupted
     from .experiment import parse_source
     from .search import SearchConfig
     from .search._grid import run_search_grid
 
-    sources = [parse_source(s) for s in args.sources]  # ValueError -> one line, exit 2 (central mapping)
-    summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),
-                                out=args.out, workers=args.workers, search=SearchConfig(time_budget=args.budget),
-                                progress=not args.quiet, figures=not args.no_figures)
+    sources = [parse_source(s) for s in args.sources]  # ValueError -> one line, exit 2
+    try:
+        summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),
+                                    out=args.out, workers=args.workers, search=SearchConfig(time_budget=args.budget),
+                                    progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler)
+    except GridInterrupted as exc:
+        return interrupted(args, exc, where=Path(args.out) / "runs")
     for key, summary in summaries.items():
         print(f"source/estimator {key}")
         print(format_search_table(summary))

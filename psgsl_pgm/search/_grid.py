@@ -12,21 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
-from ..experiment._driver import run_jobs
 from ..experiment._metrics import mean_ci
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import paired_difference, wilson_interval
 from ._policies import POLICIES
-from ._store import load_search_run, save_search_run, search_run_path
+from ._store import load_search_run, search_run_path, write_search_run
 
 __all__ = ["run_search_grid", "summarize_runs", "write_search_outputs"]
-
-
-def _job(args):
-    source, seed, policy, variant, estimator, config, search, path = args
-    run = run_closed_loop(source, seed, policy, variant, estimator, config=config, search=search)
-    save_search_run(run, path)
-    return str(path)
 
 
 def _config_of(config: ExperimentConfig, search: SearchConfig) -> dict:
@@ -188,13 +180,16 @@ def _check_sources(sources) -> None:
 def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=("olfaction", "semantics+rooms"),
                     estimators=("infotaxis",), seeds=range(10), *, out, workers: int = 2,
                     config: ExperimentConfig | None = None, search: SearchConfig | None = None,
-                    progress: bool = True, figures: bool = True, grid=None) -> dict:
+                    progress: bool = True, figures: bool = True, grid=None, scheduler: str | None = None) -> dict:
     """Run every (source, policy, variant, estimator, seed) not yet on disk, then aggregate ``out``.
 
     Jobs are submitted seed by seed (all combinations of seed 0, then of seed 1, …), so that an interrupted grid
     leaves every combination with about the same number of seeds. ``grid`` (keyword-only) replaces the full
     product by an explicit sequence of ``(source, policy, variant, estimator, seed)`` tuples, run in that order
-    (e.g. the tour with one variant only: its path does not depend on the variant).
+    (e.g. the tour with one variant only: its path does not depend on the variant). ``scheduler``: the grid
+    runner's backend (:func:`psgsl_pgm._grid_runner.run_grid`: None = a local pool of ``workers`` processes,
+    "local" = a dask LocalCluster, or a dask scheduler's address); Ctrl-C raises
+    :class:`psgsl_pgm._grid_runner.GridInterrupted` with every finished run on disk.
 
     Finished runs live in ``out/runs`` (one atomic file each) and are never redone; a stored run with another
     configuration is an error. Aggregation covers every run stored in ``out/runs``
@@ -211,12 +206,6 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     seeds = [int(s) for s in seeds]
     if not (sources and policies and variants and estimators and seeds):
         raise ValueError("need at least one source, policy, variant, estimator and seed")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    _check_sources({g[0] for g in grid} if grid is not None else set(sources))
-    out = Path(out)
-    (out / "runs").mkdir(parents=True, exist_ok=True)
-    want = _config_of(config, search)
     if grid is None:
         grid = [(so, p, v, e, se) for se, so, p, v, e in itertools.product(seeds, sources, policies, variants,
                                                                            estimators)]
@@ -226,15 +215,21 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
             if p not in POLICIES or v not in VARIANTS or e not in ESTIMATORS:
                 raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
                                  f"estimator of {ESTIMATORS}, got {(p, v, e)}")
-    jobs = []
-    for source, policy, variant, estimator, seed in grid:
-        path = search_run_path(out, source, policy, variant, estimator, seed)
-        if path.exists():
-            stored = load_search_run(path).config
-            if stored != json.loads(json.dumps(want)):
-                raise ValueError(f"{path} was computed with another configuration ({stored}); use a new output "
-                                 "directory or delete the stored runs")
-            continue
-        jobs.append((source, seed, policy, variant, estimator, config, search, path))
-    run_jobs(jobs, _job, workers=workers, progress=progress, desc="closed-loop runs")
+    _check_sources({g[0] for g in grid})
+    out = Path(out)
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    want = json.loads(json.dumps(_config_of(config, search)))
+    from .._grid_runner import GridJob, run_grid
+
+    def check_done(job) -> None:
+        stored = load_search_run(job.path).config
+        if stored != want:
+            raise ValueError(f"{job.path} was computed with another configuration ({stored}); use a new output "
+                             "directory or delete the stored runs")
+
+    jobs = [GridJob(search_run_path(out, source, policy, variant, estimator, seed), run_closed_loop,
+                    (source, seed, policy, variant, estimator), {"config": config, "search": search})
+            for source, policy, variant, estimator, seed in grid]
+    run_grid(jobs, write=write_search_run, check_done=check_done, scheduler=scheduler, workers=workers,
+             progress=progress, desc="closed-loop runs")
     return write_search_outputs(out, figures=figures)

@@ -19,35 +19,14 @@ from collections import OrderedDict
 
 import numpy as np
 from scipy import ndimage as ndi
-from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
+
+from .._grid import free_space_graph
 
 __all__ = ["FreeSpace"]
 
 _VIEW_CACHE: dict = {}  # (occupancy hash, camera, headings, cell) -> (flat cells, (n_headings, m) bool sectors)
 _VIEW_CACHE_MAX = 4096
-
-
-def _flat_graph(nav: np.ndarray, resolution: float):
-    """8-connected graph over row-major flat cell indices; only ``nav`` cells have edges; no corner cutting."""
-    h, w = nav.shape
-    flat = np.arange(nav.size).reshape(nav.shape)
-    rows, cols, wts = [], [], []
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        r0, r1 = max(0, -dr), h - max(0, dr)
-        c0, c1 = max(0, -dc), w - max(0, dc)
-        a = nav[r0:r1, c0:c1]
-        b = nav[r0 + dr : r1 + dr, c0 + dc : c1 + dc]
-        ok = a & b
-        if dr and dc:  # a diagonal step needs both side cells free
-            ok &= nav[r0 + dr : r1 + dr, c0:c1] & nav[r0:r1, c0 + dc : c1 + dc]
-        rows.append(flat[r0:r1, c0:c1][ok])
-        cols.append(flat[r0 + dr : r1 + dr, c0 + dc : c1 + dc][ok])
-        wts.append(np.full(int(ok.sum()), resolution * np.hypot(dr, dc)))
-    r, c, v = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
-    g = coo_matrix((np.concatenate([v, v]), (np.concatenate([r, c]), np.concatenate([c, r]))),
-                   shape=(nav.size, nav.size))
-    return g.tocsr()
 
 
 class FreeSpace:
@@ -71,7 +50,8 @@ class FreeSpace:
     nav : (H, W) bool
         Cells the robot may occupy.
     graph : scipy.sparse.csr_matrix
-        Over row-major flat cell indices (edges only between ``nav`` cells), weights in metres.
+        :func:`psgsl_pgm._grid.free_space_graph` of ``nav``: over row-major flat cell indices (edges only
+        between ``nav`` cells, no corner cutting), weights in metres.
     headings : (n_headings,) ndarray
     lattice : (H, W) bool
         Navigable lattice cells (candidate positions).
@@ -86,7 +66,7 @@ class FreeSpace:
         self.resolution = float(grid.resolution)
         blocked = house.robot_obstacles
         self.nav = ~blocked & (ndi.distance_transform_edt(~blocked) * self.resolution > clearance)
-        self.graph = _flat_graph(self.nav, self.resolution)
+        self.graph = free_space_graph(self.nav, self.resolution)  # the core's graph, over flat cell indices
         step = max(1, int(round(spacing / self.resolution)))
         lat = np.zeros(self.nav.shape, bool)
         lat[step // 2 :: step, step // 2 :: step] = True

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +10,7 @@ import numpy as np
 from ..experiment._config import source_label
 from ._loop import SearchRun
 
-__all__ = ["load_search_run", "save_search_run", "search_run_path"]
+__all__ = ["load_search_run", "save_search_run", "search_run_path", "write_search_run"]
 
 _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
            "region_area", "region_hit", "path", "final_posterior")
@@ -22,19 +21,20 @@ def search_run_path(directory, source, policy: str, variant: str, estimator: str
     return Path(directory) / "runs" / f"{source_label(source)}__{policy}__{variant}__{estimator}__seed{int(seed)}.npz"
 
 
+def write_search_run(run: SearchRun, fh) -> None:
+    """Write ``run`` as an ``.npz`` archive to the binary file object ``fh`` (the grid runner's writer)."""
+    np.savez_compressed(
+        fh, source=np.array(run.source), seed=np.array(run.seed), policy=np.array(run.policy),
+        variant=np.array(run.variant), estimator=np.array(run.estimator), found=np.array(run.found),
+        time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
+        config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS})
+
+
 def save_search_run(run: SearchRun, path) -> Path:
-    """Write ``run`` to ``path`` via a temporary file and ``os.replace`` (a killed run leaves no file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".part")
-    with open(tmp, "wb") as fh:
-        np.savez_compressed(
-            fh, source=np.array(run.source), seed=np.array(run.seed), policy=np.array(run.policy),
-            variant=np.array(run.variant), estimator=np.array(run.estimator), found=np.array(run.found),
-            time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
-            config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS})
-    os.replace(tmp, path)
-    return path
+    """Write ``run`` to ``path`` atomically (:func:`psgsl_pgm._grid_runner.atomic_write`)."""
+    from .._grid_runner import atomic_write
+
+    return atomic_write(path, write_search_run, run)
 
 
 def load_search_run(path) -> SearchRun:
