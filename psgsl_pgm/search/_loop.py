@@ -282,6 +282,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     headings = tuple(float(h) for h in tour.headings[0])
     cell, heading = start_cell, headings[-1]
     first = True
+    cache: dict = {}  # static per-cell rows of the decisions (hit model), for this run's estimator
     while not found and world.time - t0 < budget:
         if first:  # the common first stop: the tour's look-around at the start
             stop, drive, turn, seg = start, 0.0, 0.0, start[None]
@@ -296,7 +297,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             turn = 0.0  # the tour turns between its own headings (visit), as in the experiment
         else:
             sit = Situation(post, beliefs, variant, space, cell, heading, config.speed, config.turn_time,
-                            sense_time, search.horizon, r)
+                            sense_time, search.horizon, r, cache)
             dec = choose(policy, sit)
             cells = dec.path
             seg = space.position(cells)

@@ -32,12 +32,12 @@ best score wins; ties go to the first candidate (lattice order) and the first he
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import entr
 
-__all__ = ["Decision", "POLICIES", "Situation", "choose", "score_per_time", "travel_time"]
+__all__ = ["Decision", "POLICIES", "Situation", "choose", "olfactory_gain", "score_per_time", "travel_time"]
 
 #: Policies of the closed loop.
 POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis")
@@ -62,6 +62,9 @@ class Situation:
         m/s, s per quarter turn, s per gas reading.
     horizon, found_radius : float
         m.
+    cache : dict
+        Per-run cache of static rows (the hit model and its binary entropy per candidate cell; they depend on the
+        map and the estimator only); one dict per run, empty at the start.
     """
 
     posterior: np.ndarray
@@ -75,6 +78,7 @@ class Situation:
     sense_time: float
     horizon: float
     found_radius: float
+    cache: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -115,11 +119,31 @@ def _candidates(sit: Situation):
 
 
 def _found_mass(sit: Situation, cells):
-    """P_f: posterior mass within found_radius of each candidate cell, (K,), and the masks (K, H·W)."""
-    c = sit.space.position(cells)
-    d2 = ((sit.space.centres[None, :, :] - c[:, None, :]) ** 2).sum(axis=-1)
-    mask = d2 <= sit.found_radius**2
-    return mask @ sit.posterior.ravel(), mask
+    """P_f: posterior mass within found_radius of each candidate cell, (K,), and those cells (list of flat arrays)."""
+    post = sit.posterior.ravel()
+    discs = [sit.space.disc(c, sit.found_radius) for c in np.asarray(cells).tolist()]  # loop over candidates
+    return np.array([post[d].sum() for d in discs]), discs
+
+
+def _hit_rows(sit: Situation, cells):
+    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b, cached per cell for the run."""
+    cells = np.asarray(cells).tolist()
+    missing = [c for c in cells if c not in sit.cache]
+    if missing:
+        p = sit.beliefs.estimator.hit_probability(sit.space.position(missing)).reshape(len(missing), -1)
+        for c, row in zip(missing, p):
+            sit.cache[c] = (row, entr(row) + entr(1.0 - row))
+    rows = [sit.cache[c] for c in cells]
+    return np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows])
+
+
+def olfactory_gain(sit: Situation, cells) -> np.ndarray:
+    """φ_G = I(S; hit at p) = H_b(Σ_s p(s) P_p(s)) − Σ_s p(s) H_b(P_p(s)) under the variant's posterior, (K,) nats
+    (:meth:`OlfactoryEstimator.information_gain` with ``posterior=``, with the static rows cached)."""
+    p_hit, h_bin = _hit_rows(sit, cells)
+    post = sit.posterior.ravel()
+    p_bar = p_hit @ post
+    return np.maximum(entr(p_bar) + entr(1.0 - p_bar) - h_bin @ post, 0.0)
 
 
 def _view_information(sit: Situation, cells) -> np.ndarray:
@@ -145,7 +169,7 @@ def _best(score, cells, pred, drive, sit, *, headings=None):
 def infotaxis_gain(sit: Situation, cells):
     """G(p) of infotaxis, (K, n_headings): P_f H(S) + (1 − P_f)(φ_G + φ_O), nats."""
     p_f, _ = _found_mass(sit, cells)
-    phi_g = sit.beliefs.estimator.information_gain(sit.space.position(cells), posterior=sit.posterior)
+    phi_g = olfactory_gain(sit, cells)
     phi_o = _view_information(sit, cells)
     h = float(entr(sit.posterior).sum())
     return p_f[:, None] * h + (1.0 - p_f[:, None]) * (phi_g[:, None] + phi_o)
@@ -166,10 +190,12 @@ def space_aware_gain(sit: Situation, cells):
     dist_now = space.distances(sit.cell)
     ok = np.isfinite(dist_now)
     v_now = value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
-    p_f, mask = _found_mass(sit, cells)
-    q = np.where(mask, 0.0, post[None, :])  # not found within the radius of the candidate
+    p_f, discs = _found_mass(sit, cells)
+    q = np.repeat(post[None, :], len(cells), axis=0)
+    for k, d in enumerate(discs):  # loop over candidates: not found within the radius of the candidate
+        q[k, d] = 0.0
     q /= np.where(1 - p_f > 0, 1 - p_f, 1.0)[:, None]
-    lik = sit.beliefs.estimator.hit_probability(space.position(cells)).reshape(len(cells), -1)  # (K, n)
+    lik, _ = _hit_rows(sit, cells)  # (K, n)
     dist = np.stack([space.distances(c) for c in np.asarray(cells).tolist()])  # (K, n), cached per cell
     dist = np.where(np.isfinite(dist), dist, 0.0)  # unreachable cells carry no mass
     phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)

@@ -79,6 +79,7 @@ class FreeSpace:
         self._nearest_nav = (ri * self.nav.shape[1] + ci).ravel()
         self._offset = np.linalg.norm(self.centres - self.centres[self._nearest_nav], axis=1)
         self._dist_cache: OrderedDict = OrderedDict()
+        self._discs: dict = {}
         self._dist_cache_max = int(distance_cache)
         occ = np.ascontiguousarray(grid.occupancy)
         self._view_key = (hashlib.sha1(occ.tobytes()).hexdigest(), occ.shape, self.resolution,
@@ -149,6 +150,22 @@ class FreeSpace:
         if cells.size == 0:
             cells = np.array([int(cell)])
         return cells, dist[cells], pred
+
+    def disc(self, cell: int, radius: float) -> np.ndarray:
+        """Flat indices of the cells whose centre lies within ``radius`` of ``cell``'s centre (cached)."""
+        key = (int(cell), float(radius))
+        hit = self._discs.get(key)
+        if hit is None:
+            h, w = self.nav.shape
+            r0, c0 = divmod(int(cell), w)
+            reach = int(np.ceil(radius / self.resolution)) + 1
+            rows, cols = np.mgrid[max(0, r0 - reach) : min(h, r0 + reach + 1), max(0, c0 - reach) : min(w, c0 + reach + 1)]
+            flat = (rows * w + cols).ravel()
+            d2 = ((self.centres[flat] - self.centres[int(cell)]) ** 2).sum(axis=-1)
+            hit = flat[d2 <= radius**2]
+            hit.flags.writeable = False
+            self._discs[key] = hit
+        return hit
 
     # --- views -------------------------------------------------------------------------------------------
     def view(self, cell: int):
