@@ -182,7 +182,8 @@ def _tour_plan(tour):
 
 def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", variant: str = "semantics+rooms",
                     estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
-                    search: SearchConfig | None = None, world=None, space: FreeSpace | None = None) -> SearchRun:
+                    search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
+                    world_spec=None) -> SearchRun:
     """Run one closed-loop search in the simulated house.
 
     Parameters
@@ -201,6 +202,10 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     world : psgsl_pgm.sim.World, optional, keyword-only
     space : FreeSpace, optional, keyword-only
         Prepared geometry of the world's house (shares caches between runs).
+    world_spec : world, optional, keyword-only
+        The house, ontology, source region (the estimators' prior) and mapper beliefs
+        (:func:`psgsl_pgm.load_world`); default: the embedded house, :func:`psgsl_pgm.sim.default_world` — the
+        validation experiment's own setting. A world file's ``start`` replaces ``search.start``.
 
     Returns
     -------
@@ -208,7 +213,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     """
     from ..experiment._step import VariantPosteriors, visit
     from ..experiment._tour import exploration_tour
-    from ..sim import make_world
+    from ..sim import default_world
 
     config = ExperimentConfig() if config is None else config
     search = SearchConfig() if search is None else search
@@ -225,14 +230,16 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise TypeError(f"seed must be an integer, got {seed!r}")
     spec = parse_source(source)
+    setting = default_world() if world_spec is None else world_spec
     if world is None:
-        world = make_world(seed=int(seed), source=spec, warm_up=config.warm_up)
+        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
     house = world.house
+    start_xy = search.start if world_spec is None or world_spec.start is None else tuple(setting.start_for(house))
     if space is None:
         space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
                           n_headings=search.n_headings)
-    beliefs = VariantPosteriors(world, estimator, config)
-    tour = exploration_tour(house, start=search.start, clearance=search.clearance)
+    beliefs = VariantPosteriors(world, estimator, config, setting=setting)
+    tour = exploration_tour(house, start=start_xy, clearance=search.clearance)
     plan = _tour_plan(tour) if policy == "tour" else None
     centres = house.grid.cell_centres()
     truth = world.source
@@ -246,7 +253,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         return d2.min(axis=1) <= r * r
 
     # geodesic distance from the start to where the source counts as found
-    start_cell = space.snap(search.start)
+    start_cell = space.snap(start_xy)
     d_start = space.distances(start_cell)
     reachable = space.nav.ravel() & near(space.centres)
     geodesic = float(d_start[reachable].min()) if reachable.any() else float("inf")
@@ -316,7 +323,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                 path_pts.extend(seg[1 : k + 1])
                 world.advance(arc / config.speed)
                 break
-        reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn)
+        reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn,
+                                      camera=not beliefs.mapped)
         beliefs.observe(stop, reading, wind, frames)
         length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
         path_pts.extend(seg[1:])
