@@ -1,4 +1,9 @@
-"""Every notebook under notebooks/ runs top to bottom without error, and is committed without outputs.
+"""Every notebook under notebooks/ runs top to bottom without error or warning, and is committed without outputs.
+
+Executing a notebook also checks what a student sees: no cell may print to stderr or show a warning (a
+teaching notebook's output must be clean), and every figure left open at the end is held to the package's
+readability rules (:func:`psgsl_pgm.teaching.figure_problems`: labelled axes, a labelled colour bar for every
+image whose colour carries a value).
 
 The kernel is the interpreter running pytest: a kernelspec pointing at ``sys.executable`` is written to a
 temporary directory and used through its own KernelSpecManager, so a user-level "python3" kernelspec of
@@ -10,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -21,6 +27,15 @@ NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 CELL_TIMEOUT = 120  # seconds per cell
 KERNEL_NAME = "psgsl-pgm-test"
+#: Appended to each notebook before it runs: the readability problems of every figure still open.
+FIGURE_CHECK = """\
+import json as _json
+import matplotlib.pyplot as _plt
+from psgsl_pgm.teaching import figure_problems as _figure_problems
+print(_json.dumps({str(_n): _figure_problems(_plt.figure(_n)) for _n in _plt.get_fignums()}))
+"""
+#: A warning as Python prints it ("…: SomethingWarning: message"), wherever it shows up in an output.
+WARNING = re.compile(r"\b\w*Warning\b")
 
 
 @pytest.fixture(scope="session")
@@ -79,9 +94,44 @@ def test_notebook_is_committed_without_outputs(path):
         assert cell.outputs == [] and cell.execution_count is None, f"{path.name}: code cell {i} has outputs"
 
 
+def _output_text(output) -> str:
+    if output.get("output_type") == "stream":
+        return output.get("text", "")
+    return "".join(str(v) for k, v in output.get("data", {}).items() if k.startswith("text/"))
+
+
+def output_problems(nb) -> list:
+    """Cells of an executed notebook that wrote to stderr or show a warning (in any output)."""
+    problems = []
+    for i, cell in enumerate(c for c in nb.cells if c.cell_type == "code"):
+        for out in cell.get("outputs", []):
+            text = _output_text(out)
+            if out.get("output_type") == "stream" and out.get("name") == "stderr":
+                problems.append(f"code cell {i} writes to stderr: {text.strip()[:300]!r}")
+            elif WARNING.search(text):
+                problems.append(f"code cell {i} shows a warning: {text.strip()[:300]!r}")
+    return problems
+
+
+def test_output_problems_finds_stderr_and_warnings():
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1"), nbformat.v4.new_code_cell("2")])
+    nb.cells[0].outputs = [nbformat.v4.new_output("stream", name="stdout", text="p = 0.5\n")]
+    assert output_problems(nb) == []
+    nb.cells[1].outputs = [nbformat.v4.new_output("stream", name="stderr", text="x.py:3: UserWarning: hm\n")]
+    assert output_problems(nb) == ["code cell 1 writes to stderr: 'x.py:3: UserWarning: hm'"]
+    nb.cells[1].outputs = [nbformat.v4.new_output("execute_result", data={"text/plain": "FutureWarning: y"})]
+    assert output_problems(nb) == ["code cell 1 shows a warning: 'FutureWarning: y'"]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_runs(path, kernel_spec_dir):
-    """nbclient raises CellExecutionError (with the traceback) on the first failing cell."""
+    """No error (nbclient raises CellExecutionError with the traceback), no warning, readable figures."""
     nb = nbformat.read(path, as_version=4)
-    _execute(nb, kernel_spec_dir, path.parent)
+    nb.cells.append(nbformat.v4.new_code_cell(FIGURE_CHECK))
+    out = _execute(nb, kernel_spec_dir, path.parent)
+    check = out.cells.pop()
+    assert output_problems(out) == [], f"{path.name}: a teaching notebook's output must be clean"
+    figures = json.loads("".join(o.get("text", "") for o in check.outputs if o.get("name") == "stdout"))
+    unreadable = {n: p for n, p in figures.items() if p}
+    assert not unreadable, f"{path.name}: figures a reader cannot read: {unreadable}"
