@@ -18,7 +18,7 @@ __all__ = ["CANONICAL", "canonical_network", "export", "network_text"]
 
 #: name → (problem factory, network builder, one-line description)
 CANONICAL = {
-    "kitchen_a": (kitchen_problem, build_network_a, "the paper's kitchen example, Network A"),
+    "kitchen_a": (kitchen_problem, build_network_a, "the paper's kitchen ontology on 4 illustrative cells, Network A"),
     "grid3x3_a": (grid_problem, build_network_a, "a 3×3 kitchen grid, Network A"),
     "grid3x3_b_chain": (grid_problem, lambda p: build_network_b(p, "chain"), "the 3×3 grid, Network B (chain)"),
     "gas_type_a": (gas_type_problem, build_network_a, "gas classification (γ, ζ) on the kitchen, Network A"),
