@@ -34,8 +34,8 @@ from ._validate import flag
 
 __all__ = ["semantic_information_gain"]
 
-_ORDER = 7  # series terms: truncation error ≲ _RADIUS**(_ORDER + 1) = 1e-16 relative
-_RADIUS = 0.01  # use the series where a_n · max_i |ρ_i − w_n| ≤ _RADIUS
+_ORDER = 5  # series terms j = 2 … J: truncation ≲ _RADIUS**(_ORDER − 1) = 1e-12 of the leading (j = 2) term
+_RADIUS = 1e-3  # use the series where a_n · max_i |ρ_i − w_n| ≤ _RADIUS (at n = 1e6 cells: nearly all)
 
 
 def semantic_information_gain(

@@ -44,7 +44,7 @@ __all__ = [
 ]
 
 CHUNK = 4096  # cells per parallel work item: large enough to amortise scheduling, small enough to balance
-ORDER = 7  # information-gain series order J (the kernels below hold μ_2..μ_7 and ν_1..ν_6 in registers)
+ORDER = 5  # information-gain series order J (the kernels below hold μ_2..μ_5 and ν_1..ν_4 in registers)
 TINY = 2.0**-1000  # a product below this (of positive factors) may have lost bits: that cell goes to log space
 HUGE = 2.0**1000  # a quotient above this (division by a tiny prior) goes to log space too
 
@@ -146,7 +146,7 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
 
 @nb.njit(**_JIT)
 def _belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part, c0, c1):
-    """Rows of chunks [c0, c1): w, Jensen gap, μ_2…μ_7 (and ν_1…ν_6), Σ f w and the belief statistics."""
+    """Rows of chunks [c0, c1): w, Jensen gap, μ_2…μ_5 (and ν_1…ν_4), Σ f w and the belief statistics."""
     n, k = q.shape
     has_f = f.shape[0] > 0
     for c in range(c0, c1):
@@ -168,37 +168,29 @@ def _belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part
                 s += x
                 z += x * zero[i]
                 lo += min(x, 0.0)
-            m2 = m3 = m4 = m5 = m6 = m7 = 0.0
+            m2 = m3 = m4 = m5 = 0.0
             if paper:
-                n1 = n2 = n3 = n4 = n5 = n6 = 0.0
+                n1 = n2 = n3 = n4 = 0.0
                 for i in range(k):
                     x = q[r, i]
                     d = rho[i] - acc
+                    g = rho_log_rho[i]
                     t = x * d
-                    n1 += t * rho_log_rho[i]
+                    n1 += t * g
                     t *= d
                     m2 += t
-                    n2 += t * rho_log_rho[i]
+                    n2 += t * g
                     t *= d
                     m3 += t
-                    n3 += t * rho_log_rho[i]
+                    n3 += t * g
                     t *= d
                     m4 += t
-                    n4 += t * rho_log_rho[i]
-                    t *= d
-                    m5 += t
-                    n5 += t * rho_log_rho[i]
-                    t *= d
-                    m6 += t
-                    n6 += t * rho_log_rho[i]
-                    t *= d
-                    m7 += t
-                mom[r, 7] = n1
-                mom[r, 8] = n2
-                mom[r, 9] = n3
-                mom[r, 10] = n4
-                mom[r, 11] = n5
-                mom[r, 12] = n6
+                    n4 += t * g
+                    m5 += t * d
+                mom[r, 5] = n1
+                mom[r, 6] = n2
+                mom[r, 7] = n3
+                mom[r, 8] = n4
             else:
                 for i in range(k):
                     x = q[r, i]
@@ -209,20 +201,13 @@ def _belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part
                     m3 += t
                     t *= d
                     m4 += t
-                    t *= d
-                    m5 += t
-                    t *= d
-                    m6 += t
-                    t *= d
-                    m7 += t
+                    m5 += t * d
             w[r] = acc
             mom[r, 0] = v - acc * math.log(acc) if acc > 0 else v  # Jensen gap v − w log w ≥ 0
             mom[r, 1] = m2
             mom[r, 2] = m3
             mom[r, 3] = m4
             mom[r, 4] = m5
-            mom[r, 5] = m6
-            mom[r, 6] = m7
             tot += (f[r] if has_f else f_uniform) * acc
             neg += lo
             d = abs(s - 1.0)
@@ -259,7 +244,7 @@ def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy
     r"""I(S; O_n) for every cell from its moments (series) or, where the series converges slowly, its row.
 
     With a_n = f_n / U and x_ni = a_n (ρ_i − w_n): the series is used where a_n · max_i |ρ_i − w_n| ≤
-    ``radius`` (truncation ≲ radius^8 relative); other cells sum φ(x_ni) (exact) or the paper's terms over
+    ``radius`` (truncation ≲ radius^(ORDER−1) relative to the leading term); other cells sum φ(x_ni) (exact) or the paper's terms over
     their row of ``q`` directly. Formulas: module docstring of :mod:`psgsl_pgm._infogain`.
     """
     n, k = q.shape
@@ -274,33 +259,29 @@ def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy
         wlw = wn * math.log(wn) if wn > 0 else 0.0
         alog = a * math.log(a) if a > 0 else 0.0
         if a * spread <= radius:
-            # (−a)^j μ_j, j = 2..7 (μ_1 = 0 exactly)
+            # (−a)^j μ_j, j = 2..5 (μ_1 = 0 exactly)
             na = -a
             p2 = na * na
             p3 = p2 * na
             p4 = p3 * na
             p5 = p4 * na
-            p6 = p5 * na
-            p7 = p6 * na
-            m2, m3, m4, m5, m6, m7 = mom[r, 1], mom[r, 2], mom[r, 3], mom[r, 4], mom[r, 5], mom[r, 6]
-            t2, t3, t4, t5, t6, t7 = p2 * m2, p3 * m3, p4 * m4, p5 * m5, p6 * m6, p7 * m7
+            m2, m3, m4, m5 = mom[r, 1], mom[r, 2], mom[r, 3], mom[r, 4]
+            t2, t3, t4, t5 = p2 * m2, p3 * m3, p4 * m4, p5 * m5
             if not paper:
                 # Σ_i q_i φ(x_i) = Σ_{j≥2} (−a)^j μ_j / (j (j−1))
-                g = a * jensen - (t2 / 2.0 + t3 / 6.0 + t4 / 12.0 + t5 / 20.0 + t6 / 30.0 + t7 / 42.0)
+                g = a * jensen - (t2 / 2.0 + t3 / 6.0 + t4 / 12.0 + t5 / 20.0)
                 out[r] = g if g > 0.0 else 0.0
             else:
-                one_minus_s0 = -(t2 + t3 + t4 + t5 + t6 + t7)  # 1 − Σ q / Z
-                t1 = na * m2 + p2 * m3 + p3 * m4 + p4 * m5 + p5 * m6 + p6 * m7  # Σ q (ρ − w) / Z
-                n1, n2, n3, n4, n5, n6 = mom[r, 7], mom[r, 8], mom[r, 9], mom[r, 10], mom[r, 11], mom[r, 12]
+                one_minus_s0 = -(t2 + t3 + t4 + t5)  # 1 − Σ q / Z
+                t1 = na * m2 + p2 * m3 + p3 * m4 + p4 * m5  # Σ q (ρ − w) / Z
+                n1, n2, n3, n4 = mom[r, 5], mom[r, 6], mom[r, 7], mom[r, 8]
                 s2_gap = jensen + (
                     na * n1  # μ_1 = 0
                     + p2 * (n2 - wlw * m2)
                     + p3 * (n3 - wlw * m3)
                     + p4 * (n4 - wlw * m4)
-                    + p5 * (n5 - wlw * m5)
-                    + p6 * (n6 - wlw * m6)
                 )
-                s3 = -(t2 / 2.0 + t3 / 3.0 + t4 / 4.0 + t5 / 5.0 + t6 / 6.0 + t7 / 7.0)  # Σ q log Z
+                s3 = -(t2 / 2.0 + t3 / 3.0 + t4 / 4.0 + t5 / 5.0)  # Σ q log Z
                 out[r] = entropy * one_minus_s0 + alog * t1 + a * s2_gap - s3
         else:
             if not paper:
@@ -454,8 +435,8 @@ def belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper):
     r"""Per-cell weight, Jensen gap and central moments for the information gain, in one pass over ``q``.
 
     For each cell n with w_n = q_n · ρ: the Jensen gap v_n − w_n log w_n (v_n = q_n · ρ log ρ), the central
-    moments μ_j = Σ_i q_ni (ρ_i − w_n)^j for j = 2 … 7 and, when ``paper``, ν_j = Σ_i q_ni ρ_i log ρ_i
-    (ρ_i − w_n)^j for j = 1 … 6. Each row is read from memory once; the second loop over it runs from L1.
+    moments μ_j = Σ_i q_ni (ρ_i − w_n)^j for j = 2 … 5 and, when ``paper``, ν_j = Σ_i q_ni ρ_i log ρ_i
+    (ρ_i − w_n)^j for j = 1 … 4. Each row is read from memory once; the second loop over it runs from L1.
 
     Parameters
     ----------
@@ -470,14 +451,14 @@ def belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper):
     Returns
     -------
     w : (n,) float64 ndarray
-    mom : (n, 7) or (n, 13) float64 ndarray
-        Columns [Jensen gap, μ_2 … μ_7] (+ [ν_1 … ν_6] when ``paper``).
+    mom : (n, 5) or (n, 9) float64 ndarray
+        Columns [Jensen gap, μ_2 … μ_5] (+ [ν_1 … ν_4] when ``paper``).
     stats : (5,) float64 ndarray
         As :func:`belief_weights`, with the last entry U = Σ_c f_c w_c instead of Σ_c w_c.
     """
     n = q.shape[0]
     w = np.empty(n)
-    mom = np.empty((n, 13 if paper else 7))
+    mom = np.empty((n, 9 if paper else 5))
     part = np.zeros((n_chunks(n), 5))
     run(_belief_moments, n, q.size * (3 if paper else 2), q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part)
     return w, mom, combine_stats(part)
@@ -495,7 +476,7 @@ def gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy,
     r"""I(S; O_n) for every cell from its moments (series) or, where the series converges slowly, its row.
 
     With a_n = f_n / U and x_ni = a_n (ρ_i − w_n): the series is used where a_n · max_i |ρ_i − w_n| ≤
-    ``radius`` (truncation ≲ radius^8 relative); other cells sum φ(x_ni) (exact) or the paper's terms over
+    ``radius`` (truncation ≲ radius^(ORDER−1) relative to the leading term); other cells sum φ(x_ni) (exact) or the paper's terms over
     their row of ``q`` directly. Formulas: module docstring of :mod:`psgsl_pgm._infogain`.
     """
     n = q.shape[0]
