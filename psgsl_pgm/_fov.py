@@ -67,6 +67,33 @@ def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, reso
     (True, False)
     """
     occ = _occupancy(occupancy)
+    cam = _camera(occ, pose, max_range=max_range, half_angle=half_angle, min_range=min_range,
+                  resolution=resolution, origin=origin)
+    return visible_from(occ, cam.cell, reach=cam.reach, candidate=cam.in_cone,
+                        cone=(cam.heading, cam.half_angle, cam.offset))
+
+
+class _Camera:
+    """A validated camera pose on a grid: its cell, its continuous grid position and its cone test."""
+
+    __slots__ = ("col0", "row0", "heading", "half_angle", "min_range", "max_range", "res", "cell", "reach",
+                 "offset")
+
+    def in_cone(self, rows, cols):
+        """Cells whose centre is within [min_range, max_range] of the pose and within half_angle of its
+        heading (range and angle from the pose itself)."""
+        dx, dy = (cols + 0.5 - self.col0) * self.res, (rows + 0.5 - self.row0) * self.res
+        dist = np.hypot(dx, dy)
+        bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - self.heading)))  # wrapped to (−π, π]
+        return (
+            (dist >= self.min_range)
+            & (dist <= self.max_range)
+            & ((np.abs(bearing) <= self.half_angle) | (dist < 1e-12 * self.res))
+        )
+
+
+def _camera(occ, pose, *, max_range, half_angle, min_range=0.0, resolution=1.0, origin=(0.0, 0.0)) -> _Camera:
+    """Validate the options of :func:`field_of_view` for one pose on ``occ`` (already validated)."""
     p = as_float_array(pose, "pose", dtype=np.float64, ndim=1)
     if p.shape != (3,):
         raise ValueError(f"pose must be (x, y, heading), got {describe(p)}")
@@ -87,17 +114,18 @@ def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, reso
     col0, row0 = (x - org[0]) / res, (y - org[1]) / res  # continuous grid coordinates of the camera
     if not (0 <= col0 < w and 0 <= row0 < h):
         raise ValueError(f"pose ({x}, {y}) lies outside the map (extent {w * res} × {h * res} from origin {org.tolist()})")
+    cam = _Camera()
+    cam.col0, cam.row0, cam.heading, cam.half_angle = col0, row0, float(heading), half_angle
+    cam.min_range, cam.max_range, cam.res = min_range, max_range, res
     r0, c0 = int(row0), int(col0)
+    cam.cell = (r0, c0)
+    cam.reach = int(min(np.ceil(max_range / res) + 1, max(h, w)))
+    cam.offset = float(np.hypot(col0 - c0 - 0.5, row0 - r0 - 0.5))  # camera to its cell centre, in cells
+    return cam
 
-    def in_cone(rows, cols):  # range and opening angle, from the pose itself
-        dx, dy = (cols + 0.5 - col0) * res, (rows + 0.5 - row0) * res
-        dist = np.hypot(dx, dy)
-        bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - heading)))  # wrapped to (−π, π]
-        return (dist >= min_range) & (dist <= max_range) & ((np.abs(bearing) <= half_angle) | (dist < 1e-12 * res))
 
-    reach = int(min(np.ceil(max_range / res) + 1, max(h, w)))
-    offset = float(np.hypot(col0 - c0 - 0.5, row0 - r0 - 0.5))  # camera to its cell centre, in cells
-    return visible_from(occ, (r0, c0), reach=reach, candidate=in_cone, cone=(float(heading), half_angle, offset))
+def _everything(rows, cols):
+    return np.ones(rows.shape, dtype=bool)
 
 
 def view_information_gain(information_gain, occupancy, pose, **fov):
@@ -118,6 +146,11 @@ def view_information_gain(information_gain, occupancy, pose, **fov):
     -------
     phi : float or (P,) ndarray
         φ_O for the pose, or for each candidate pose.
+
+    Notes
+    -----
+    Candidate poses that share a camera cell (several headings from one place, as a planner considers
+    them) share one shadow cast (:func:`psgsl_pgm._sight.visible_from`): cost ∝ distinct cells, not poses.
     """
     gain = as_float_array(information_gain, "information_gain", dtype=np.float64, ndim=2)
     occ = _occupancy(occupancy)
@@ -130,4 +163,23 @@ def view_information_gain(information_gain, occupancy, pose, **fov):
         return float(gain[field_of_view(occ, poses, **fov)].sum())
     if poses.ndim != 2 or poses.shape[1] != 3:
         raise ValueError(f"pose must be (3,) or (P, 3), got {describe(poses)}")
-    return np.array([gain[field_of_view(occ, p, **fov)].sum() for p in poses])  # loop over poses
+    cams = [_camera(occ, p, **fov) for p in poses]
+    by_cell: dict = {}
+    for i, cam in enumerate(cams):
+        by_cell.setdefault(cam.cell, []).append(i)
+    phi = np.empty(len(cams))
+    for cell, members in by_cell.items():  # loop over distinct camera cells
+        if len(members) == 1:
+            cam = cams[members[0]]
+            seen = visible_from(occ, cell, reach=cam.reach, candidate=cam.in_cone,
+                                cone=(cam.heading, cam.half_angle, cam.offset))
+            phi[members[0]] = gain[seen].sum()
+            continue
+        # Occlusion is traced from the cell's centre and does not depend on the heading or the exact pose in
+        # the cell: one shadow cast for every pose in it, then each pose's range-and-angle test on the cells
+        # seen. The same cells as field_of_view, gathered in the same (row-major) order, so the same sums.
+        rows, cols = np.nonzero(visible_from(occ, cell, reach=cams[members[0]].reach, candidate=_everything))
+        values = gain[rows, cols]
+        for i in members:
+            phi[i] = values[cams[i].in_cone(rows, cols)].sum()
+    return phi
