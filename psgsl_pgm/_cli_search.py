@@ -94,16 +94,22 @@ def _open_space(args) -> int:
     return 0
 
 
+def _num(value, fmt: str) -> str:
+    """A number in ``fmt``, or "n/a" where there is none (e.g. no interval from a single run)."""
+    return "n/a" if value is None else format(value, fmt)
+
+
 def format_search_table(summary: dict) -> str:
     """One line per ``"<policy>/<variant>"``: success rate [Wilson 95 %], time to find mean [95 % CI], median."""
     lines = [f"{'policy/variant':<36} {'success [95% CI]':>22} {'time to find, s: mean [95% CI]':>34} {'median':>7} "
              f"{'cov90':>6} {'n':>3}"]
     for key, s in summary.items():
         sr, t = s["success_rate"], s["time_to_find"]
+        lo, hi = t["ci95"]
         lines.append(f"{key:<36} {sr['value']:6.2f} [{sr['ci95'][0]:.2f}, {sr['ci95'][1]:.2f}]      "
-                     f"{t['mean']:8.1f} [{t['ci95'][0]:7.1f}, {t['ci95'][1]:7.1f}]          {t['median']:7.1f} "
+                     f"{t['mean']:8.1f} [{_num(lo, '7.1f')}, {_num(hi, '7.1f')}]          {t['median']:7.1f} "
                      f"{s['coverage90']:6.2f} {s['n_runs']:3d}")
-    lines.append("(runs not found count at the budget)")
+    lines.append("(runs not found count at the budget; no interval from a single run)")
     return "\n".join(lines)
 
 

@@ -56,3 +56,14 @@ def test_bad_option_values_are_refused(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["search", "--budget", "-1"])
     assert exc.value.code == 2
+
+
+def test_table_of_a_single_run_has_no_interval(tmp_path):
+    """One seed (the demo's): the summary's intervals are null and the table says n/a instead of failing."""
+    from psgsl_pgm._cli_search import format_search_table
+
+    entry = {"success_rate": {"value": 1.0, "ci95": [0.21, 1.0]},
+             "time_to_find": {"mean": 161.4, "ci95": [None, None], "median": 161.4},
+             "coverage90": 1.0, "n_runs": 1}
+    text = format_search_table({"infotaxis/semantics+rooms": entry})
+    assert "n/a" in text and "161.4" in text
