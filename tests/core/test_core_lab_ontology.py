@@ -158,3 +158,14 @@ def test_the_labs_own_files():
     assert ont.room_likelihood("Kitchen")[ont.class_index("oven")] == pytest.approx(0.2, rel=1e-12)
     assert ont.class_prior[ont.class_index("oven")] == pytest.approx(1 / 81, rel=1e-12)
     assert ont.gases == ("smoke", "sewage")
+
+
+def test_duplicate_keys_are_errors_not_last_wins(tmp_path):
+    (tmp_path / "o.yaml").write_text("Gases:\n  - gas: smoke\n    probs:\n      oven: 0.4\n      oven: 0.3\n")
+    with pytest.raises(ValueError, match=r"o\.yaml: duplicate key 'oven' at line 5 \(first at line 4\)"):
+        Ontology.from_yaml(tmp_path / "o.yaml")
+    (tmp_path / "o.yaml").write_text(LAB)
+    (tmp_path / "r.yaml").write_text("number_classes: 10\nroom_categories:\n  Kitchen: {oven: 0.2}\n"
+                                     "  Kitchen: {oven: 0.1}\n")
+    with pytest.raises(ValueError, match=r"r\.yaml: duplicate key 'Kitchen'"):
+        Ontology.from_yaml(tmp_path / "o.yaml", room_classes=tmp_path / "r.yaml")

@@ -243,3 +243,10 @@ def test_the_world_figure_is_readable(flat):
         assert figure_problems(fig) == []
         assert fig.axes[0].get_xlabel() == "x [m]" and fig.axes[0].get_ylabel() == "y [m]"
         plt.close(fig)
+
+
+def test_duplicate_world_keys_are_errors(flat):
+    text = (flat / "world.yaml").read_text()
+    (flat / "dup.yaml").write_text(text + "resolution: 0.2\n")
+    with pytest.raises(ValueError, match=r"dup\.yaml: duplicate key 'resolution'"):
+        load_world(flat / "dup.yaml")
