@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..sim import default_world
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._metrics import error_and_spread
 from ._step import VariantPosteriors, semantic_terms, visit
@@ -109,8 +110,6 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     -------
     RunResult
     """
-    from ..sim import default_world
-
     config = ExperimentConfig() if config is None else config
     if not isinstance(config, ExperimentConfig):
         raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")

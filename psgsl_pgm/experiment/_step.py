@@ -16,8 +16,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._beliefs import room_evidence, update_class_probs
+from .._class_beliefs import ClassBeliefMap
 from .._fusion import fuse
 from .._semantic import semantic_source_probability
+from ..olfaction import GridInfotaxis, PlumeModel, PMFSEstimator
+from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig
 
 __all__ = ["VariantPosteriors", "make_estimator", "semantic_terms", "visit"]
@@ -35,8 +39,6 @@ def semantic_terms(maps, likelihood, class_prior):
 
 def make_estimator(name, model, config, *, prior=None):
     """The olfactory estimator ``name`` of :data:`ESTIMATORS` on ``model`` with ``config``'s settings."""
-    from ..olfaction import GridInfotaxis, PMFSEstimator
-
     if name == "infotaxis":
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
                                         false_hit_rate=config.false_hit_rate)
@@ -85,7 +87,8 @@ class VariantPosteriors:
     estimator : OlfactoryEstimator
         p(s | g), shared by the variants.
     maps : dict
-        ``{"semantics": SemanticMap, "semantics+rooms": SemanticMap}``.
+        ``{"semantics": ClassBeliefMap, "semantics+rooms": ClassBeliefMap}`` (the core's class beliefs, in
+        the detector's class order decided here, once).
     likelihood, class_prior : (k,) ndarray
         p(o | s, γ) and β = p(o | ¬s) in the detector's class order.
     model : PlumeModel
@@ -94,10 +97,6 @@ class VariantPosteriors:
     """
 
     def __init__(self, world, estimator: str, config: ExperimentConfig, *, setting=None):
-        from .. import room_evidence, update_class_probs
-        from ..olfaction import PlumeModel
-        from ..sim import SemanticMap, default_world, match_names, reindex
-
         setting = default_world() if setting is None else setting
         house = world.house
         ontology = setting.ontology
@@ -112,17 +111,17 @@ class VariantPosteriors:
         room_table = ontology.room_table[:, order]
         room_table = room_table / room_table.sum(axis=1, keepdims=True)
         self.mapped = setting.class_beliefs is not None  # a mapper's beliefs replace the simulated camera
+        labels = reindex(house.room_labels, house.room_names, ontology.rooms)  # house rooms -> ontology rows
         if self.mapped:
             given = setting.class_beliefs[..., order]
-            labels = reindex(house.room_labels, house.room_names, ontology.rooms)
             factor = room_evidence(labels, room_table, beta)  # p(o | room) / p(o); 1 outside listed rooms
             if given.ndim == 4:
                 factor = factor[:, :, None, :]
-            plain = SemanticMap(given, classes)
-            rooms = SemanticMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
+            plain = ClassBeliefMap(given, classes)
+            rooms = ClassBeliefMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
         else:
-            plain = world.semantic_map(beta)
-            rooms = world.semantic_map(beta, room_table=room_table, room_names=ontology.rooms)
+            plain = ClassBeliefMap.from_prior(house.shape, beta, classes)
+            rooms = ClassBeliefMap.from_rooms(labels, room_table, beta, classes)
         self.maps = {"semantics": plain, "semantics+rooms": rooms}
         self.model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
                                               diffusivity=config.diffusivity, lifetime=config.lifetime,
@@ -135,7 +134,7 @@ class VariantPosteriors:
         self.estimator.update(stop, reading.hit, wind)
         for frame in frames:
             for m in self.maps.values():  # the same frames for both maps: one observation stream
-                m.update(frame)
+                m.observe(frame)
 
     def semantic(self, variant: str) -> np.ndarray:
         """p(s | z) of a semantic variant, (H, W)."""
