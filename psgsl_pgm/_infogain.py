@@ -29,8 +29,7 @@ from scipy.special import xlogy
 
 from ._beliefs_check import check_belief_stats, flat_beliefs
 from ._ratios import class_ratio
-from ._semantic import cell_distribution
-from ._validate import flag
+from ._validate import cell_distribution, flag
 
 __all__ = ["semantic_information_gain"]
 

@@ -8,6 +8,11 @@ The generative model (the paper's Network A, Sec. "Model"; Sec. "Probabilistic G
   (``background``, independent of γ);
 * Z_cj | O_c with likelihood vectors p(z_cj | o) (``observation_likelihoods``, cell ``observation_cells``);
 * G | S with p(g | S = c) (``olfactory_likelihood``).
+
+Pure numpy (it lives in the core, so a core-only install can build and solve problems in closed form); the
+pgmpy networks of ``psgsl_pgm.networks`` are built from it, and ``psgsl_pgm.networks.SemanticGSLProblem``
+is this class. Inputs go through the core's validation vocabulary (same types and tolerances as
+:func:`psgsl_pgm.semantic_source_probability`).
 """
 
 from __future__ import annotations
@@ -17,11 +22,10 @@ import math
 import numpy as np
 from scipy.special import logsumexp
 
-from .._beliefs import update_class_probs
-from .._fusion import fuse
-from .._semantic import semantic_source_probability
-from .._validate import as_float_array, check_nonnegative, check_sums, index as as_index
-from ._names import check_identifier
+from ._beliefs import update_class_probs
+from ._fusion import fuse
+from ._semantic import semantic_source_probability
+from ._validate import as_float_array, check_nonnegative, check_sums, identifier as check_identifier, index as as_index
 
 __all__ = ["MAX_CELLS", "SemanticGSLProblem"]
 

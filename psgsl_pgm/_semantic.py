@@ -6,18 +6,9 @@ import numpy as np
 
 from ._beliefs_check import check_belief_stats, flat_beliefs
 from ._ratios import class_ratio
-from ._validate import as_float_array, check_distribution, describe, flag
+from ._validate import as_float_array, cell_distribution, check_distribution, describe, flag
 
-__all__ = ["semantic_source_probability", "column_sum", "cell_distribution"]
-
-
-def cell_distribution(x, name: str, cell_shape: tuple) -> np.ndarray:
-    """Validate a distribution over cells (non-negative, finite, sums to 1) of shape ``cell_shape``."""
-    arr = as_float_array(x, name)
-    if arr.shape != tuple(cell_shape):
-        raise ValueError(f"{name} must have the cells' shape {tuple(cell_shape)}, got {describe(arr)}")
-    check_distribution(arr.reshape(-1), name, sums=np.sum(arr, dtype=np.float64))
-    return arr
+__all__ = ["semantic_source_probability", "column_sum"]
 
 
 def column_sum(values: np.ndarray, column_axis, ndim: int) -> np.ndarray:

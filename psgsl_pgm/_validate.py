@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 
 import numpy as np
 
@@ -35,6 +36,7 @@ __all__ = [
     "as_array",
     "as_float_array",
     "bool_mask",
+    "cell_distribution",
     "check_distribution",
     "check_last_axis",
     "check_nonnegative",
@@ -43,6 +45,7 @@ __all__ = [
     "distribution",
     "file_field",
     "flag",
+    "identifier",
     "index",
     "names",
     "positive",
@@ -375,3 +378,75 @@ def file_field(where: str, field: str, value, *, positive: bool = False, nonnega
     if integer and v != round(v):
         raise ValueError(f"{where}: field '{field}' must be an integer, got {value!r}")
     return v
+
+
+_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
+
+
+def identifier(name: object, what: str) -> str:
+    """Return ``name`` if it is a valid XMLBIF/BIF identifier, else raise.
+
+    Parameters
+    ----------
+    name : object
+        Candidate name.
+    what : str
+        What the name is for, used in the error message.
+
+    Returns
+    -------
+    str
+        ``name`` unchanged.
+
+    Examples
+    --------
+    >>> identifier("oven", "class name")
+    'oven'
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"{what} must be a str, got {type(name).__name__} {name!r}")
+    if not _IDENTIFIER.match(name):
+        raise ValueError(
+            f"{what} must start with a letter and contain only letters, digits and underscores "
+            f"(XMLBIF/BIF identifiers), got {name!r}"
+        )
+    return name
+
+
+def source_node(cell: str) -> str:
+    """Network B's binary source variable S_i of cell ``cell``."""
+    return f"S_{cell}"
+
+
+def object_node(cell: str) -> str:
+    """The object-class variable O_c of cell ``cell``."""
+    return f"O_{cell}"
+
+
+def observation_node(cell: str, j: int) -> str:
+    """The j-th semantic observation Z of cell ``cell`` (child of O_c)."""
+    return f"Z_{cell}_{j}"
+
+
+def olfactory_node(cell: str) -> str:
+    """Network B's per-cell olfactory evidence G_i (child of S_i)."""
+    return f"G_{cell}"
+
+
+def counter_node(cell: str) -> str:
+    """The chain encoding's counter C_i after cell ``cell``."""
+    return f"C_{cell}"
+
+
+def zeta_node(j: int) -> str:
+    """The j-th gas-classifier observation ζ (child of γ)."""
+    return f"zeta_{j}"
+
+
+def cell_distribution(x, name: str, cell_shape: tuple) -> np.ndarray:
+    """Validate a distribution over cells (non-negative, finite, sums to 1) of shape ``cell_shape``."""
+    arr = as_float_array(x, name)
+    if arr.shape != tuple(cell_shape):
+        raise ValueError(f"{name} must have the cells' shape {tuple(cell_shape)}, got {describe(arr)}")
+    check_distribution(arr.reshape(-1), name, sums=np.sum(arr, dtype=np.float64))
+    return arr

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..olfaction import PlumeModel, encounter_scale_mle
+from ..sim import make_world
 from ._config import ExperimentConfig, parse_source
 from ._run import walk
 from ._tour import exploration_tour
@@ -34,9 +36,6 @@ def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig
     kappa : float
         m²/s.
     """
-    from ..olfaction import PlumeModel, encounter_scale_mle
-    from ..sim import make_world
-
     config = ExperimentConfig() if config is None else config
     runs = list(runs)
     if not runs:

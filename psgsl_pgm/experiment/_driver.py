@@ -7,6 +7,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from .._grid_runner import GridJob, run_grid
+from ..sim import default_house
 from ._config import ESTIMATORS, ExperimentConfig, parse_source, source_label
 from ._store import load_run, run_path, write_run
 from ._summary import format_table, summarize, write_csv, write_summary

@@ -9,6 +9,7 @@ import numpy as np
 
 from .._ontology import Ontology
 from .._yaml import load_yaml
+from ..sim import default_house
 
 __all__ = ["house_ontology"]
 
@@ -18,8 +19,6 @@ REFERENCE_SEEDS = tuple(range(10_000, 10_010))
 
 @lru_cache(maxsize=4)
 def _cached(seeds: tuple, pseudo_count: float) -> Ontology:
-    from ..sim import default_house
-
     houses = [default_house(s) for s in seeds]
     classes = houses[0].classes
     rooms = houses[0].room_names

@@ -9,10 +9,18 @@
 * :func:`export` — the canonical networks (:data:`CANONICAL`, :func:`canonical_network`) as XMLBIF, BIF and
   PNG files (``psgsl export-networks DIR``; the files under ``networks/``), drawn by :func:`draw_network`.
 
-pgmpy is imported only here (``import psgsl_pgm`` stays light).
+pgmpy is imported only here (``import psgsl_pgm`` stays light); it comes with the ``networks`` extra,
+``pip install "psgsl-pgm[networks]"``. :class:`SemanticGSLProblem` itself is pure numpy and lives in the core
+(``psgsl_pgm._problem``); it is re-exported here, where its networks are.
 """
 
-from . import _quiet_import  # noqa: F401  (first: pgmpy imported without its import-time warnings)
+try:  # first: pgmpy imported without its import-time warnings; pgmpy is this subpackage's optional dependency
+    from . import _quiet_import  # noqa: F401
+except ModuleNotFoundError as err:
+    if not (err.name or "").split(".")[0] == "pgmpy":
+        raise
+    raise ImportError('psgsl_pgm.networks needs pgmpy (the "networks" extra): pip install "psgsl-pgm[networks]"') from err
+
 from ._cpds import check_normalised
 from ._draw import draw_network
 from ._export import CANONICAL, canonical_network, export
@@ -25,7 +33,7 @@ from ._inference import (
 )
 from ._network_a import build_network_a
 from ._network_b import MAX_TABLE_CELLS, build_network_b
-from ._problem import SemanticGSLProblem
+from .._problem import SemanticGSLProblem
 from ._underflow import MIN_EVIDENCE, log_evidence
 
 __all__ = [

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._kitchen import ETHANOL, FOUR_CELL_OLFACTION, FOUR_CELLS, kitchen_ontology
 from .._kitchen import detector_likelihood as _detector
-from ._problem import SemanticGSLProblem
+from .._problem import SemanticGSLProblem
 
 __all__ = ["gas_type_problem", "grid_problem", "kitchen_problem"]
 

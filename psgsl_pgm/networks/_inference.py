@@ -18,7 +18,7 @@ from ._names import (
     object_node,
     source_node,
 )
-from ._problem import SemanticGSLProblem
+from .._problem import SemanticGSLProblem
 from ._underflow import check_result, check_scale
 
 __all__ = [

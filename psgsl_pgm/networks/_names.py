@@ -6,7 +6,7 @@ underscores, so exported files load back unchanged.
 
 from __future__ import annotations
 
-import re
+from .._validate import identifier as check_identifier
 
 __all__ = [
     "ALPHA",
@@ -27,8 +27,6 @@ __all__ = [
     "zeta_node",
 ]
 
-_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
-
 #: Network A: the single source variable S over cells.
 SOURCE = "S"
 #: Network A: the olfactory evidence node G (child of S).
@@ -47,36 +45,6 @@ SOURCE_STATES = ("no", "yes")
 COUNTER_STATES = ("none", "one", "many")
 #: States of α; the constraint is enforced by the evidence α = ``true``.
 ALPHA_STATES = ("false", "true")
-
-
-def check_identifier(name: object, what: str) -> str:
-    """Return ``name`` if it is a valid XMLBIF/BIF identifier, else raise.
-
-    Parameters
-    ----------
-    name : object
-        Candidate name.
-    what : str
-        What the name is for, used in the error message.
-
-    Returns
-    -------
-    str
-        ``name`` unchanged.
-
-    Examples
-    --------
-    >>> check_identifier("oven", "class name")
-    'oven'
-    """
-    if not isinstance(name, str):
-        raise TypeError(f"{what} must be a str, got {type(name).__name__} {name!r}")
-    if not _IDENTIFIER.match(name):
-        raise ValueError(
-            f"{what} must start with a letter and contain only letters, digits and underscores "
-            f"(XMLBIF/BIF identifiers), got {name!r}"
-        )
-    return name
 
 
 def source_node(cell: str) -> str:

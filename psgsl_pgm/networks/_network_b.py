@@ -19,7 +19,7 @@ from ._names import (
     source_node,
 )
 from ._network_a import _check_problem, gas_nodes, object_evidence
-from ._problem import SemanticGSLProblem
+from .._problem import SemanticGSLProblem
 
 __all__ = ["MAX_TABLE_CELLS", "build_network_b", "source_bernoulli"]
 

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.special import logsumexp
 
 from ._network_b import source_bernoulli
-from ._problem import SemanticGSLProblem
+from .._problem import SemanticGSLProblem
 
 __all__ = ["MIN_EVIDENCE", "check_result", "check_scale", "log_evidence"]
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._problem import SemanticGSLProblem
 from .._validate import index as as_index
 
 __all__ = ["approximation_error"]
@@ -59,8 +60,6 @@ def approximation_error(cell_counts, *, n_problems=20, k=4, seed=0, max_observat
     >>> bool(err["marginal"][1] < err["marginal"][0]), bool(err["background"].max() < 1e-12)
     (True, True)
     """
-    from psgsl_pgm.networks import SemanticGSLProblem, build_network_a, exact_source_posterior
-
     if reference not in ("closed_form", "pgmpy"):
         raise ValueError(f"reference must be 'closed_form' or 'pgmpy', got {reference!r}")
     counts = [as_index(n, "cell_counts entries", minimum=2) for n in np.atleast_1d(np.asarray(cell_counts)).tolist()]
@@ -77,6 +76,9 @@ def approximation_error(cell_counts, *, n_problems=20, k=4, seed=0, max_observat
             problem = SemanticGSLProblem.random(np.random.default_rng([seed, n, i]), n, k, uniform_prior=True,
                                                 max_observations=max_observations, zero_fraction=0.0)
             if reference == "pgmpy":
+                # pgmpy is an optional extra ("networks"): imported only when this reference is asked for
+                from ..networks import build_network_a, exact_source_posterior
+
                 exact = exact_source_posterior(build_network_a(problem), problem)
             else:
                 exact = problem.closed_form_posterior(class_prior="background")  # exact with ρ = β

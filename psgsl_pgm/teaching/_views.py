@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..sim import Camera, DetectorModel, take_frame
+
 __all__ = ["candidate_poses", "survey"]
 
 
@@ -44,8 +46,6 @@ def survey(house, poses, semantic_map, *, seed, camera=None, detector=None, laye
     >>> survey(house, [(7.5, 3.0, -1.5)], m, seed=0).n_frames
     1
     """
-    from psgsl_pgm.sim import Camera, DetectorModel, take_frame
-
     p = np.asarray(poses, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
         raise ValueError(f"poses must be a (P, 3) array of (x, y, heading), got shape {p.shape}")
