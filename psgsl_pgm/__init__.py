@@ -8,6 +8,7 @@ Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on fu
   columns (Sec. "Voxelized Scene Representations");
 * :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. ``combined-conditionals``);
 * :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
+  :class:`ClassBeliefMap` — the robot's dense class beliefs over cells or voxels, frame by frame;
 * :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
   φ_O(p) (Sec. "Information Gain Optimization");
 * :class:`GridMap` — the occupancy grid every part of the package shares (frame, cell <-> world, coarsening,
@@ -22,6 +23,7 @@ Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian net
 """
 
 from ._beliefs import room_evidence, update_class_probs
+from ._class_beliefs import ClassBeliefMap
 from ._fov import field_of_view, view_information_gain
 from ._fusion import fuse
 from ._grid import GridMap
@@ -42,6 +44,7 @@ def load_world(path):
 
 
 __all__ = [
+    "ClassBeliefMap",
     "GridMap",
     "Ontology",
     "field_of_view",

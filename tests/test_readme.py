@@ -12,7 +12,11 @@ BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
 def test_readme_shows_the_two_fresh_machine_commands():
     text = README.read_text()
     assert 'pip install -e ".[test]" && python -m pytest -q' in text
-    assert "pip install . && psgsl" in text
+    assert 'python -m venv .venv && . .venv/bin/activate && pip install ".[all]" && psgsl' in text
+    ci = (README.parent / ".ci" / "run").read_text()  # CI runs exactly the commands README shows
+    for line in ci.splitlines():
+        if line.startswith(("TEST_CMD=", "MAIN_CMD=")):
+            assert line.split("=", 1)[1].strip("'") in text, line
 
 
 @pytest.mark.parametrize("block", BLOCKS, ids=[f"block{i}" for i in range(len(BLOCKS))])
