@@ -13,7 +13,7 @@ from ._metrics import mean_ci
 
 __all__ = ["EARLY", "aligned", "format_table", "summarize", "write_csv", "write_summary"]
 
-#: The "early" point of the search: a quarter of the tour (issue 5; paper Fig. error-chart's initial phase).
+#: The "early" point of the search: a quarter of the tour (paper Fig. error-chart's initial phase).
 EARLY = 0.25
 
 

@@ -21,7 +21,7 @@ def kitchen_problem() -> SemanticGSLProblem:
     Ontology p(o | s) from the core's ``kitchen_ontology()`` (oven 0.4, microwave 0.25, refrigerator 0.3,
     countertop 0.05, other 0); background β uniform (0.2). Each cell is seen once by a detector that
     reports its object: p(z | o) = 0.7 for that class, 0.1 for each other class. Olfactory likelihood
-    p(g | c) = (0.5, 1, 0.5, 1). Worked by hand (see ``tests/test_networks_kitchen.py``): p(s | z) =
+    p(g | c) = (0.5, 1, 0.5, 1). Worked by hand (see ``tests/networks/test_networks_kitchen.py``): p(s | z) =
     (0.34, 0.25, 0.28, 0.13) and p(s | g, z) = (17, 25, 14, 13) / 69.
     """
     ontology = kitchen_ontology()

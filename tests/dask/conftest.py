@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from dask_parts import RealCluster
+from .dask_parts import RealCluster
 
 pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install 'psgsl-pgm[dask]')")
 

@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 import pytest
-from dask_parts import free_port, wait_until, worker_env
+from .dask_parts import free_port, wait_until, worker_env
 
 from psgsl_pgm._cli import main
 from psgsl_pgm.experiment import load_run

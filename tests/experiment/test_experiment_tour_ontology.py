@@ -11,11 +11,6 @@ from psgsl_pgm.sim import HOUSE_CLASSES, HOUSE_ROOMS, default_house
 
 
 @pytest.fixture(scope="module")
-def house():
-    return default_house(0)
-
-
-@pytest.fixture(scope="module")
 def tour(house):
     return exploration_tour(house)
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from olfaction_maps import RES, lattice_stops, potential_flow, small_house, two_rooms
+from .olfaction_maps import RES, lattice_stops, potential_flow, small_house, two_rooms
 
 from psgsl_pgm.olfaction import GridInfotaxis, PlumeModel, PMFSEstimator
 

@@ -18,8 +18,8 @@ from psgsl_pgm.sim import (
 
 
 # ---- house ---------------------------------------------------------------------------------------------------
-def test_default_house_layout():
-    h = default_house(0)
+def test_default_house_layout(house):
+    h = house
     g = h.grid
     assert g.shape == (120, 100) and g.resolution == 0.1 and g.origin == (0.0, 0.0)
     assert h.room_names == HOUSE_ROOMS
@@ -60,8 +60,8 @@ def test_default_house_is_deterministic_per_seed():
         default_house(1.5)
 
 
-def test_class_maps():
-    h = default_house(0)
+def test_class_maps(house):
+    h = house
     cm = h.class_map
     other = HOUSE_CLASSES.index(OTHER)
     assert (cm[~h.furniture] == other).all() and (cm[h.furniture] != other).all()
@@ -76,7 +76,7 @@ def test_class_maps():
     np.testing.assert_array_equal(vox[~h.furniture], other)
 
 
-def test_plot_house_runs():
+def test_plot_house_runs(house):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -84,7 +84,7 @@ def test_plot_house_runs():
 
     from psgsl_pgm.sim import plot_house
 
-    h = default_house(0)
+    h = house
     conc = np.full(h.shape, np.nan)
     conc[::2, ::2] = 1.0
     ax = plot_house(h, wind=potential_flow(h.grid, h.inlet, h.outlet), concentration=conc, source=(7.5, 0.5))
@@ -152,8 +152,8 @@ def test_potential_flow_matches_dense_reference():
     assert field.speed()[inner].mean() == pytest.approx(0.25, rel=1e-12)
 
 
-def test_house_flow_divergence_free_and_no_flux_through_walls():
-    h = default_house(0)
+def test_house_flow_divergence_free_and_no_flux_through_walls(house):
+    h = house
     g = h.grid
     field = potential_flow(g, h.inlet, h.outlet, mean_speed=0.2)
     inner = g.free & ~h.inlet & ~h.outlet
@@ -201,8 +201,8 @@ def test_potential_flow_errors():
         potential_flow(g, a, b, mean_speed=-1)
 
 
-def test_perturbed_wind_sequence():
-    h = default_house(0)
+def test_perturbed_wind_sequence(house):
+    h = house
     g = h.grid
     seq = make_wind(g, h.inlet, h.outlet, mean_speed=0.2, perturbation=0.3, period=10.0, duration=100.0, seed=5)
     again = make_wind(g, h.inlet, h.outlet, mean_speed=0.2, perturbation=0.3, period=10.0, duration=100.0, seed=5)

@@ -5,6 +5,8 @@ examples of psgsl_pgm.sim."""
 import numpy as np
 import pytest
 
+import psgsl_pgm
+import psgsl_pgm._sight
 import psgsl_pgm.sim as sim
 from psgsl_pgm import Ontology
 from psgsl_pgm.sim import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, GasSensor, make_world
@@ -72,5 +74,10 @@ def test_public_names():
     for name in ("load_ros_map", "load_room_map", "default_house", "GridMap", "World", "make_world"):
         assert name in sim.__all__
     assert sorted(sim.__all__) == sorted(set(sim.__all__))
-    for name in sim.__all__:
-        assert getattr(sim, name) is not None
+    for name in sim.__all__:  # every public name is defined, and is the project's own object
+        obj = getattr(sim, name)
+        if callable(obj):
+            assert obj.__module__.startswith("psgsl_pgm."), (name, obj.__module__)
+        else:  # the constants: class and room names, confusion groups
+            assert isinstance(obj, (str, tuple)) and obj, (name, obj)
+    assert sim.GridMap is psgsl_pgm.GridMap and sim.cells_clear is psgsl_pgm._sight.cells_clear

@@ -6,13 +6,8 @@ import numpy as np
 import pytest
 
 from psgsl_pgm import field_of_view
-from psgsl_pgm.sim import Camera, SemanticMap, default_house
+from psgsl_pgm.sim import Camera, SemanticMap
 from psgsl_pgm.teaching import candidate_poses, survey
-
-
-@pytest.fixture(scope="module")
-def house():
-    return default_house(seed=0)
 
 
 def test_survey_updates_only_the_cells_in_view(house):

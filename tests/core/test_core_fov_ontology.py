@@ -92,7 +92,7 @@ def test_reads_the_labs_room_table_as_partial_rows():
     import yaml
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "mapir_house_B" / "ObjectProbByRoom.yaml"
+    path = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B" / "ObjectProbByRoom.yaml"
     if not path.exists():
         pytest.skip("../shared/data is absent")
     rooms = yaml.safe_load(path.read_text())["room_categories"]

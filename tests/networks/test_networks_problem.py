@@ -164,6 +164,6 @@ def test_check_result_refuses_nan_and_zero():
 
 def test_importing_the_core_does_not_import_pgmpy():
     code = "import sys, psgsl_pgm; print('pgmpy' in sys.modules)"
-    repo = Path(__file__).resolve().parents[1]
+    repo = Path(__file__).resolve().parents[2]
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=repo)
     assert out.stdout.strip() == "False"

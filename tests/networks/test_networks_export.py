@@ -17,7 +17,7 @@ from psgsl_pgm.networks import (
 )
 from psgsl_pgm.networks._export import CANONICAL, canonical_network, network_text
 
-NETWORKS_DIR = Path(__file__).resolve().parents[1] / "networks"
+NETWORKS_DIR = Path(__file__).resolve().parents[2] / "networks"
 READERS = {"xmlbif": XMLBIFReader, "bif": BIFReader}
 
 

@@ -1,11 +1,11 @@
-"""I(S; O_n) from the closed form against the exact joint p(S, O_n | evidence) (tests/brute_force.py)."""
+"""I(S; O_n) from the closed form against the exact joint p(S, O_n | evidence) (tests/core/brute_force.py)."""
 
 import numpy as np
 import pytest
 
-import brute_force as bf
+from . import brute_force as bf
 from psgsl_pgm import _infogain, semantic_information_gain
-from test_core_exactness import beliefs
+from .test_core_exactness import beliefs
 
 
 def library_gain(problem, predictive):

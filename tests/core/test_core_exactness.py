@@ -1,10 +1,10 @@
-"""The closed form against brute force (tests/brute_force.py): exact with the background prior, the paper's
+"""The closed form against brute force (tests/core/brute_force.py): exact with the background prior, the paper's
 approximation with the marginal prior, gas mixtures, voxel columns, room evidence and fusion priors."""
 
 import numpy as np
 import pytest
 
-import brute_force as bf
+from . import brute_force as bf
 from psgsl_pgm import fuse, room_evidence, semantic_source_probability, update_class_probs
 
 RTOL = 1e-10  # exact results: round-off only
