@@ -143,7 +143,7 @@ def _estimate(args) -> int:
 
     from . import Ontology, fuse, semantic_source_probability
     from ._output import check_output_file, write_file_atomically
-    from ._validate import as_float_array, check_distribution, check_nonnegative
+    from ._validate import as_float_array, check_distribution, check_nonnegative, check_sums
 
     out = check_output_file(args.out)  # before reading anything: a directory, a device or no folder is refused
     try:
@@ -171,7 +171,8 @@ def _estimate(args) -> int:
     if olfactory.shape != cells:
         raise _UsageError(f"--olfactory must have the map's shape {cells}, got {olfactory.shape}")
     check_distribution(as_float_array(class_probs, "--class-probs"), "--class-probs (p(o_c | z_c) per cell)")
-    check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
+    olf = check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
+    check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g), over all cells)", olf.dtype)
     semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
                                            column_axis=2 if voxels else None)  # voxel columns -> cells
     posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)

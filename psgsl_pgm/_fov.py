@@ -15,9 +15,8 @@ def _occupancy(occupancy) -> np.ndarray:
     try:
         return bool_mask(occupancy, "occupancy")
     except TypeError:
-        raise TypeError(
-            f"occupancy must be boolean (True = occupied) or 0/1, got {describe(np.asarray(occupancy))}"
-        ) from None
+        shown = describe(occupancy) if isinstance(occupancy, np.ndarray) else type(occupancy).__name__
+        raise TypeError(f"occupancy must be boolean (True = occupied) or 0/1, got {shown}") from None
 
 
 def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, resolution=1.0, origin=(0.0, 0.0)):

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from .._validate import as_float_array, describe, real_number, real_pair, unit_interval
+from .._validate import (as_float_array, check_nonnegative, check_sums, describe, real_number, real_pair,
+                         unit_interval)
 
 __all__ = ["error_and_spread", "mean_ci"]
 
@@ -41,9 +42,10 @@ def error_and_spread(posteriors, centres, truth):
     if c.shape[-1] != 2 or c.shape[:2] != p.shape[-2:]:
         raise ValueError(f"centres must be (H, W, 2) cell centres for posteriors over (H, W) = {p.shape[-2:]}, got "
                          f"{describe(c)}")
-    for what, arr in (("posteriors", p), ("centres", c)):
-        if arr.size == 0 or not np.isfinite(arr).all():
-            raise ValueError(f"{what} must be non-empty and finite, got {describe(arr)}")
+    if c.size == 0 or not np.isfinite(c).all():
+        raise ValueError(f"centres must be non-empty and finite, got {describe(c)}")
+    check_nonnegative(p, "posteriors")
+    check_sums(p.reshape(p.shape[:-2] + (-1,)).sum(axis=-1), "posteriors (each over the (H, W) cells)", p.dtype)
     truth = real_pair(truth, "truth", "an (x, y)", "metres")
     flat = p.reshape(p.shape[:-2] + (-1,))
     xy = c.reshape(-1, 2)

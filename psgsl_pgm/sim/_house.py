@@ -217,9 +217,10 @@ def segment_mask(grid: GridMap, p0, p1, *, width: float) -> np.ndarray:
     width = positive(width, "width", "metres")
     c = grid.cell_centres()
     d = b - a
-    t = np.clip(((c - a) @ d) / max(d @ d, 1e-300), 0.0, 1.0)
-    dist = np.linalg.norm(c - (a + t[..., None] * d), axis=-1)
-    return dist <= width
+    with np.errstate(over="ignore", invalid="ignore"):  # a segment ~1e154 m away: no cell is near it (NaN <= w)
+        t = np.clip(((c - a) @ d) / max(d @ d, 1e-300), 0.0, 1.0)
+        dist = np.linalg.norm(c - (a + t[..., None] * d), axis=-1)
+        return dist <= width
 
 
 # ---- the embedded default house ------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 """The project's one safe YAML reader (psgsl_pgm._yaml) and the loaders that use it."""
 
 import codecs
+import functools
 
 import numpy as np
 import pytest
@@ -51,8 +52,9 @@ def test_malformed_yaml_is_one_line_naming_source_and_position():
             load_yaml_text(text, source="h.yaml")
         assert str(err.value).startswith("h.yaml: not valid YAML") and where in str(err.value)
         assert "\n" not in str(err.value)
-    with pytest.raises(ValueError, match="h.yaml: not valid YAML: nested too deeply"):
+    with pytest.raises(ValueError, match="h.yaml: nested deeper than 100 levels at line 1"):
         load_yaml_text("[" * 50_000, source="h.yaml")
+    assert load_yaml_text("a: " + "[" * 99 + "]" * 99) == {"a": functools.reduce(lambda x, _: [x], range(98), [])}
     with pytest.raises(ValueError, match="h.yaml: not valid YAML: could not determine a constructor"):
         load_yaml_text("x: !!python/object/apply:os.system [ls]", source="h.yaml")
     with pytest.raises(TypeError, match="YAML text must be a str, got bytes"):
