@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
+from . import _dask_arrays
+from ._dask_arrays import is_dask_array
 from ._validate import as_float_array, check_nonnegative, describe, check_sums
 
 __all__ = ["fuse"]
@@ -52,6 +54,8 @@ def fuse(*posteriors, prior=None):
     """
     if len(posteriors) == 0:
         raise TypeError("fuse needs at least one posterior, got none")
+    if any(is_dask_array(p) for p in (*posteriors, prior)):  # chunked over cells, lazy: psgsl_pgm._dask_arrays
+        return _dask_arrays.fuse_dask(*posteriors, prior=prior)
     from ._kernel import fuse_finish, fuse_pair, fuse_step  # compiled on first use (numba)
 
     arrays = [as_float_array(p, f"posteriors[{j}]", min_ndim=1) for j, p in enumerate(posteriors)]

@@ -27,7 +27,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import xlogy
 
+from . import _dask_arrays
 from ._beliefs_check import check_belief_stats, flat_beliefs
+from ._dask_arrays import is_dask_array
 from ._ratios import class_ratio
 from ._validate import cell_distribution, flag
 
@@ -93,6 +95,9 @@ def semantic_information_gain(
     validate = flag(validate, "validate")
     if predictive not in ("paper", "exact"):
         raise ValueError(f"predictive must be 'paper' or 'exact', got {predictive!r}")
+    if is_dask_array(class_probs) or is_dask_array(olfactory):  # chunked over cells, lazy: psgsl_pgm._dask_arrays
+        return _dask_arrays.information_gain_dask(class_probs, source_likelihood, class_prior, olfactory=olfactory,
+                                                  gas_probs=gas_probs, predictive=predictive, validate=validate)
     from ._kernel import ORDER, belief_moments, entropy_terms, gain_from_moments  # compiled on first use
 
     if _ORDER != ORDER:

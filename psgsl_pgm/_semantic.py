@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _dask_arrays
 from ._beliefs_check import check_belief_stats, flat_beliefs
+from ._dask_arrays import is_dask_array
 from ._ratios import class_ratio
 from ._validate import as_float_array, cell_distribution, check_distribution, describe, flag
 
@@ -105,6 +107,10 @@ def semantic_source_probability(
     array([0.604, 0.396])
     """
     normalize, validate = flag(normalize, "normalize"), flag(validate, "validate")
+    if is_dask_array(class_probs):  # chunked over cells, lazy: psgsl_pgm._dask_arrays
+        return _dask_arrays.semantic_source_probability_dask(
+            class_probs, source_likelihood, class_prior, gas_probs=gas_probs, column_axis=column_axis,
+            normalize=normalize, source_prior=source_prior, validate=validate)
     from ._kernel import belief_weights  # compiled on first use (numba), not at package import
 
     ratio = class_ratio(source_likelihood, class_prior, gas_probs)

@@ -1,0 +1,397 @@
+r"""Semantic maps larger than memory: the core functions on dask arrays chunked over cells.
+
+:func:`psgsl_pgm.semantic_source_probability`, :func:`psgsl_pgm.fuse` and
+:func:`psgsl_pgm.semantic_information_gain` dispatch here (one test at their top, :func:`is_dask_array`)
+when an input is a ``dask.array.Array``; they then return a lazy dask array of the cells' shape, chunked like
+the input. Nothing is materialised: every chunk goes through the *numpy* kernels of the core (eq.
+``prob-semantics-final`` per chunk), and whatever couples the cells — the normaliser of p(s | z), the log-sum-exp
+of :func:`fuse`, the normaliser U and the entropy H(S) of the information gain — is a global dask reduction.
+A zarr-backed class-belief array works as is: ``dask.array.from_zarr(store)``.
+
+Validation is lazy too: the checks of the numpy path (finite, non-negative, normalised, compatible supports)
+run per chunk, or on the global reductions, when the result is computed, and raise the same ValueError
+(cell indices are global). Shapes, dtypes and the ontology inputs are checked at once.
+
+dask is imported only here, and only when a dask array arrives: the core imports without dask installed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["fuse_dask", "information_gain_dask", "is_dask_array", "semantic_source_probability_dask"]
+
+
+def is_dask_array(x) -> bool:
+    """Whether ``x`` is a ``dask.array.Array`` (without importing dask)."""
+    return type(x).__module__.startswith("dask.array") and hasattr(x, "chunks") and hasattr(x, "dask")
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+
+
+def _float_dtype(x, name: str) -> np.dtype:
+    """The floating dtype the numpy path would use for ``x`` (real numbers only)."""
+    dt = np.dtype(x.dtype)
+    if dt.kind not in "fiu":
+        raise TypeError(f"{name} must be a real numeric array, got a dask array of dtype {dt}")
+    return np.dtype(np.float32) if dt == np.float32 else np.dtype(np.float64)
+
+
+def _offset(block_info) -> tuple:
+    """Global index of a block's first element (from dask's ``block_info``)."""
+    if not block_info or None not in block_info:
+        return ()
+    return tuple(int(lo) for lo, _ in block_info[None]["array-location"])
+
+
+def _relocate(exc: ValueError, offset: tuple, cell_shape: tuple | None = None) -> ValueError:
+    """Make the block-local "at cell/index (…)" of a numpy-path message global.
+
+    With ``cell_shape`` (a class-belief chunk, which the numpy path flattens to (n, k)), the first index is the
+    flat cell number within the chunk; otherwise the indices are the chunk's own.
+    """
+    import re
+
+    number = r"(?<![\w.])-?\d+(?![\w.])"  # not the 64 of "np.int64(…)"
+
+    def shift(m):
+        idx = [int(v) for v in re.findall(number, m.group(2))]
+        if not idx:
+            return m.group(0)
+        if cell_shape is not None:
+            cell = np.unravel_index(idx[0], cell_shape)
+            glob = [int(c) + o for c, o in zip(cell, offset)] + idx[1:]
+        else:
+            glob = [i + o for i, o in zip(idx, offset)] + idx[len(offset):]
+        return f"{m.group(1)} {tuple(glob)}"
+
+    return ValueError(re.sub(r"(at (?:cell|index))\s*(\((?:[^()]|\([^()]*\))*\))", shift, str(exc), count=1))
+
+
+def _sum_check(total, name: str, dtype):
+    """0-d block function: refuse a sum that is not 1 (as :func:`psgsl_pgm._validate.check_sums`)."""
+    from ._validate import check_sums
+
+    check_sums(np.asarray(total, dtype=np.float64).reshape(()), name, dtype)
+    return total
+
+
+def _positive_check(total, message: str):
+    if not np.asarray(total).reshape(()) > 0:
+        raise ValueError(message)
+    return total
+
+
+def _nonnegative_block(block, name: str, block_info=None):
+    from ._validate import check_nonnegative
+
+    try:
+        check_nonnegative(block, name)
+    except ValueError as exc:
+        raise _relocate(exc, _offset(block_info)) from None
+    return block
+
+
+def _after(x, *checks):
+    """``x`` with lazy 0-d checks attached: computing ``x`` runs them first."""
+    import dask.array as da
+
+    for check in checks:
+        x = da.map_blocks(_first, x, check, dtype=x.dtype, meta=np.empty((0,) * x.ndim, dtype=x.dtype))
+    return x
+
+
+def _first(block, *checked):
+    return block
+
+
+def _recomputed(x, after):
+    """``x`` recomputed from its sources once ``after`` is known (memory stays one chunk per worker thread).
+
+    Without this, dask keeps every chunk of ``x`` that feeds a global reduction in memory until the reduction
+    is done — the whole map.
+    """
+    from dask.graph_manipulation import bind
+
+    return bind(x, after)
+
+
+def _as_dask(x, name: str, like):
+    """A dask array of ``like``'s shape and chunks from ``x`` (numpy or dask), validated lazily (non-negative)."""
+    import dask.array as da
+
+    arr = x if is_dask_array(x) else da.from_array(np.asarray(x), chunks=like.chunks)
+    _float_dtype(arr, name)
+    if arr.shape != like.shape:
+        raise ValueError(f"{name} must have the cells' shape {like.shape}, got a dask array of shape {arr.shape}")
+    if arr.chunks != like.chunks:
+        arr = arr.rechunk(like.chunks)
+    return arr.map_blocks(_nonnegative_block, name, dtype=arr.dtype)
+
+
+def _class_chunks(q, k: int, name: str):
+    """Validate the (..., k) shape of a dask class-belief array and put the class axis in one chunk."""
+    if q.ndim < 2:
+        raise ValueError(f"{name} must have cell axes before the class axis, shape (..., {k}); got {q.shape}")
+    if q.shape[-1] != k:
+        raise ValueError(f"{name} must have {k} classes on its last axis, got a dask array of shape {q.shape}")
+    if q.numblocks[-1] != 1:
+        q = q.rechunk({q.ndim - 1: -1})
+    return q
+
+
+# ------------------------------------------------------------------------------------- p(s | z)
+
+
+def _semantic_block(q, lik, prior, gas, validate, block_info=None):
+    from ._semantic import semantic_source_probability
+
+    try:  # the numpy path on one chunk: eq. prob-semantics-final, unnormalised (scale common to all chunks)
+        return semantic_source_probability(q, lik, prior, gas_probs=gas, normalize=False, validate=validate)
+    except ValueError as exc:
+        raise _relocate(exc, _offset(block_info), q.shape[:-1]) from None
+
+
+def semantic_weights_dask(class_probs, source_likelihood, class_prior, *, gas_probs=None, validate=True):
+    """Per-cell weights w_c = Σ_i p(o_ci|z_c) ρ_i (lazy), as ``semantic_source_probability(normalize=False)``."""
+    import dask.array as da
+
+    from ._ratios import class_ratio
+
+    ratio = class_ratio(source_likelihood, class_prior, gas_probs)  # the ontology side: small, checked now
+    dtype = _float_dtype(class_probs, "class_probs")
+    q = _class_chunks(class_probs, ratio.k, "class_probs")
+    lik = np.asarray(source_likelihood, dtype=np.float64)
+    gas = None if gas_probs is None else np.asarray(gas_probs, dtype=np.float64)
+    prior = np.asarray(class_prior, dtype=np.float64)
+    return da.map_blocks(_semantic_block, q, lik, prior, gas, validate, drop_axis=q.ndim - 1, dtype=dtype,
+                         meta=np.empty((0,) * (q.ndim - 1), dtype=dtype))
+
+
+def semantic_source_probability_dask(class_probs, source_likelihood, class_prior, *, gas_probs=None,
+                                     column_axis=None, normalize=True, source_prior=None, validate=True):
+    """:func:`psgsl_pgm.semantic_source_probability` for a dask ``class_probs``; returns a lazy dask array."""
+    import dask.array as da
+
+    from ._semantic import column_sum
+
+    weights = semantic_weights_dask(class_probs, source_likelihood, class_prior, gas_probs=gas_probs,
+                                    validate=validate)
+    if source_prior is not None:
+        prior = _as_dask(source_prior, "source_prior", weights)
+        if _float_dtype(prior, "source_prior") != prior.dtype:
+            prior = prior.astype(_float_dtype(prior, "source_prior"))
+        total = da.map_blocks(_sum_check, prior.sum(dtype=np.float64), "source_prior", prior.dtype, dtype=np.float64)
+        weights = _after(weights * prior, total)  # p(s_c) p(z | s_c)
+    weights = column_sum(weights, column_axis, weights.ndim)  # Σ_{v∈c} p(s_v | z): a dask reduction
+    if not normalize:
+        return weights
+    total = da.map_blocks(
+        _positive_check, weights.sum(dtype=np.float64),
+        "no cell can hold the source: every cell's class beliefs (times source_prior) give zero weight to the "
+        "classes that source_likelihood allows", dtype=np.float64)
+    # the global normaliser is one reduction over all chunks; the weights are then recomputed chunk by chunk
+    # (bind) instead of being held in memory until the reduction ends
+    return (_recomputed(weights, total) / total).astype(weights.dtype)
+
+
+# ---------------------------------------------------------------------------------------------- fuse
+
+
+def _log_block(*blocks, m: int, has_prior: bool, block_info=None):
+    """Σ_j log p(s|e_j) − (m−1) log p(s) on one chunk, as in the numpy path of :func:`fuse`."""
+    arrays = blocks[:m]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_p = np.sum([np.log(a, dtype=np.float64) for a in arrays], axis=0)
+        if has_prior:
+            pr = np.asarray(blocks[m], dtype=np.float64)
+            support = np.isfinite(log_p)
+            if np.any(support & (pr == 0)):
+                cell = np.argwhere(support & (pr == 0))[0] + np.array(_offset(block_info) or 0)
+                raise ValueError(f"prior is zero at cell {tuple(int(i) for i in cell)} where every posterior is "
+                                 "positive")
+            log_p = np.where(support, log_p - (m - 1) * np.log(pr), -np.inf)
+    return log_p
+
+
+def _exp_block(log_p, norm, dtype):
+    with np.errstate(invalid="ignore"):
+        return np.exp(log_p - norm).astype(dtype, copy=False)
+
+
+def _lse_block(log_p):
+    """(max, Σ exp(log p − max)) of one chunk, shape (1,)*ndim + (2,)."""
+    mx = np.max(log_p)
+    with np.errstate(invalid="ignore"):
+        s = np.sum(np.exp(log_p - mx)) if np.isfinite(mx) else 0.0
+    return np.array([mx, s]).reshape((1,) * log_p.ndim + (2,))
+
+
+def _norm_check(parts, *overlaps, m: int):
+    """log Σ_c exp(log p_c) from the chunks' (max, Σ exp(log p − max)); a conflict (−inf) is named as in the
+    numpy path of :func:`psgsl_pgm.fuse`."""
+    parts = np.asarray(parts, dtype=np.float64).reshape(-1, 2)
+    mx = parts[:, 0].max()
+    if not np.isfinite(mx):
+        for (i, j), overlap in zip(_pairs(m), overlaps):
+            if not bool(np.asarray(overlap).reshape(())):
+                raise ValueError(f"the posteriors conflict: posteriors[{i}] and posteriors[{j}] have no cell where "
+                                 "both are positive, so their product is zero everywhere")
+        raise ValueError("the posteriors conflict: their product is zero in every cell (no single cell is positive "
+                         "in all)")
+    finite = np.isfinite(parts[:, 0])
+    return np.asarray(np.log(np.sum(parts[finite, 1] * np.exp(parts[finite, 0] - mx))) + mx)
+
+
+def _pairs(m: int):
+    return [(i, j) for i in range(m) for j in range(i + 1, m)]
+
+
+def fuse_dask(*posteriors, prior=None):
+    """:func:`psgsl_pgm.fuse` when a posterior (or the prior) is a dask array; returns a lazy dask array."""
+    import dask.array as da
+
+    first = next(p for p in (*posteriors, prior) if is_dask_array(p))
+    if first.ndim < 1:
+        raise ValueError(f"posteriors must have at least 1 dimension(s), got a dask array of shape {first.shape}")
+    arrays = []
+    for j, p in enumerate(posteriors):
+        a = _as_dask(p, f"posteriors[{j}]", first) if (is_dask_array(p) or np.shape(p) == first.shape) else None
+        if a is None:
+            raise ValueError(f"posteriors[{j}] must have the shape of posteriors[0], {first.shape}, got shape "
+                             f"{np.shape(p)}")
+        dt = _float_dtype(a, f"posteriors[{j}]")
+        sums = da.map_blocks(_sum_check, a.sum(dtype=np.float64), f"posteriors[{j}] (over all cells)", dt,
+                             dtype=np.float64)
+        arrays.append(_after(a, sums))
+    out_dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
+    extra = []
+    if prior is not None:
+        pr = _as_dask(prior, "prior", first).astype(np.float64)
+        total = da.map_blocks(_sum_check, pr.sum(dtype=np.float64), "prior (over all cells)", np.float64,
+                              dtype=np.float64)
+        extra = [_after(pr, total)]
+    m = len(arrays)
+    log_p = da.map_blocks(_log_block, *arrays, *extra, m=m, has_prior=prior is not None, dtype=np.float64)
+    parts = da.map_blocks(_lse_block, log_p, new_axis=log_p.ndim, chunks=(*((1,) * len(c) for c in log_p.chunks),
+                                                                           (2,)), dtype=np.float64)
+    overlaps = [((arrays[i] > 0) & (arrays[j] > 0)).any() for i, j in _pairs(m)]  # only read on a conflict
+    norm = da.map_blocks(_norm_check, parts.rechunk(-1), *overlaps, m=m, drop_axis=tuple(range(parts.ndim)),
+                         chunks=(), dtype=np.float64)  # log-sum-exp over all cells: one pass, one reduction
+    return da.map_blocks(_exp_block, _recomputed(log_p, norm), norm, out_dtype, dtype=out_dtype)
+
+
+# ---------------------------------------------------------------------------------- information gain
+
+
+def _gain_products(q, source_likelihood, class_prior, gas_probs, validate):
+    """The numpy path's per-cell raw moments of one chunk (see :mod:`psgsl_pgm._infogain`)."""
+    from scipy.special import xlogy
+
+    from . import _infogain as ig
+    from ._beliefs_check import belief_products
+    from ._ratios import class_ratio
+
+    ratio = class_ratio(source_likelihood, class_prior, gas_probs)
+    rho = ratio.rho
+    rho_log_rho = xlogy(rho, rho)
+    powers = rho[:, None] ** np.arange(1, ig._ORDER + 1)
+    log_powers = rho_log_rho[:, None] * rho[:, None] ** np.arange(ig._ORDER)
+    bp = belief_products(q, np.hstack([powers, log_powers]), zero_prior=ratio.zero_prior, validate=validate)
+    return rho, bp, bp.products.astype(np.float64, copy=False)
+
+
+def _validated_block(q, lik, prior, gas, block_info=None):
+    """The numpy path's checks of one class-belief chunk (messages with global cell indices); returns it."""
+    _semantic_block(q, lik, prior, gas, True, block_info=block_info)
+    return q
+
+
+def _gain_totals_block(q, f, lik, prior, gas, n):
+    """Partial sums of U = Σ f_c w_c and Σ xlogy(f_c w_c, f_c w_c) over one chunk: shape (1,)*ndim + (2,)."""
+    from scipy.special import xlogy
+
+    _, bp, raw = _gain_products(q, lik, prior, gas, False)
+    w = raw[:, 0]
+    fc = np.full(w.shape[0], 1.0 / n) if f is None else np.asarray(f, dtype=np.float64).reshape(-1)
+    fw = fc * w
+    return np.array([fw.sum(), xlogy(fw, fw).sum()]).reshape((1,) * (q.ndim - 1) + (2,))
+
+
+def _gain_block(q, f, totals, lik, prior, gas, predictive, n):
+    """I(S; O_n) on one chunk given the map's U and H(S): the numpy path's formulas per cell."""
+    from scipy.special import xlogy
+
+    from . import _infogain as ig
+
+    rho, bp, raw = _gain_products(q, lik, prior, gas, False)  # checked in the first pass
+    total, entropy = float(totals[0]), float(totals[1])
+    J = ig._ORDER
+    raw_nu = raw[:, J:]
+    w, v = raw[:, 0], raw_nu[:, 0]
+    fc = np.full(w.shape[0], 1.0 / n) if f is None else np.asarray(f, dtype=np.float64).reshape(-1)
+    a = fc / total
+    jensen = v - xlogy(w, w)
+    spread = np.maximum(rho.max() - w, w - rho.min())
+    series = a * spread <= ig._RADIUS
+    gain = np.empty(w.shape[0])
+    moments = raw.T
+    if np.any(series):
+        idx = np.flatnonzero(series)
+        gain[idx] = ig._series_gain(a[idx], w[idx], jensen[idx], np.ascontiguousarray(moments[:, idx]), entropy,
+                                    predictive)
+    if not np.all(series):
+        idx = np.flatnonzero(~series)
+        gain[idx] = ig._elementwise_gain(bp.q, idx, rho, a, w, jensen, entropy, predictive)
+    if predictive == "exact":
+        np.maximum(gain, 0.0, out=gain)
+    return gain.reshape(bp.cell_shape)
+
+
+def _entropy(parts):
+    """(U, H(S)) from Σ f w and Σ xlogy(f w, f w): p = f w / U, H = log U − Σ f w log(f w) / U."""
+    total = parts[0]
+    if not total > 0:
+        raise ValueError("olfactory and the semantic term have no cell in common: their fusion is zero everywhere")
+    return np.array([total, np.log(total) - parts[1] / total])
+
+
+def information_gain_dask(class_probs, source_likelihood, class_prior, *, olfactory=None, gas_probs=None,
+                          predictive="paper", validate=True):
+    """:func:`psgsl_pgm.semantic_information_gain` for a dask ``class_probs``: a lazy float64 dask array.
+
+    Two passes over the beliefs: one global reduction for U = Σ_c f_c w_c and H(S), then the per-cell gain of
+    every chunk with the numpy kernels of :mod:`psgsl_pgm._infogain`.
+    """
+    import dask.array as da
+
+    from ._ratios import class_ratio
+
+    if predictive not in ("paper", "exact"):
+        raise ValueError(f"predictive must be 'paper' or 'exact', got {predictive!r}")
+    ratio = class_ratio(source_likelihood, class_prior, gas_probs)
+    _float_dtype(class_probs, "class_probs")
+    q = _class_chunks(class_probs, ratio.k, "class_probs")
+    cell_shape, ndim = q.shape[:-1], q.ndim - 1
+    n = int(np.prod(cell_shape))
+    like = da.zeros(cell_shape, chunks=q.chunks[:-1], dtype=np.float64)
+    lik = np.asarray(source_likelihood, dtype=np.float64)
+    gas = None if gas_probs is None else np.asarray(gas_probs, dtype=np.float64)
+    prior = np.asarray(class_prior, dtype=np.float64)
+    checked = q.map_blocks(_validated_block, lik, prior, gas, dtype=q.dtype) if validate else q
+    if olfactory is None:
+        f, f_index = None, None
+    else:
+        f = _as_dask(olfactory, "olfactory", like).astype(np.float64)
+        f = _after(f, da.map_blocks(_sum_check, f.sum(dtype=np.float64), "olfactory", np.float64, dtype=np.float64))
+        f_index = tuple(range(ndim))
+    cells, cls, two = tuple(range(ndim)), ndim, ndim + 1
+    parts = da.blockwise(_gain_totals_block, cells + (two,), checked, cells + (cls,), f, f_index, lik, None, prior,
+                         None, gas, None, n, None, new_axes={two: 2}, adjust_chunks={i: 1 for i in cells},
+                         concatenate=True, dtype=np.float64, meta=np.empty((0,) * (ndim + 1)))
+    totals = da.map_blocks(_entropy, parts.sum(axis=cells), dtype=np.float64)  # (U, H(S)): global reductions
+    q2, f2 = _recomputed((q, f), totals) if f is not None else (_recomputed(q, totals), None)  # second pass
+    return da.blockwise(_gain_block, cells, q2, cells + (cls,), f2, f_index, totals, (two,), lik, None, prior, None,
+                        gas, None, predictive, None, n, None, concatenate=True, dtype=np.float64,
+                        meta=np.empty((0,) * ndim))
