@@ -3,9 +3,12 @@ r"""Semantic maps larger than memory: the core functions on dask arrays chunked 
 :func:`psgsl_pgm.semantic_source_probability`, :func:`psgsl_pgm.fuse` and
 :func:`psgsl_pgm.semantic_information_gain` dispatch here (one test at their top, :func:`is_dask_array`)
 when an input is a ``dask.array.Array``; they then return a lazy dask array of the cells' shape, chunked like
-the input. Nothing is materialised: every chunk goes through the *numpy* kernels of the core (eq.
-``prob-semantics-final`` per chunk), and whatever couples the cells — the normaliser of p(s | z), the log-sum-exp
-of :func:`fuse`, the normaliser U and the entropy H(S) of the information gain — is a global dask reduction.
+the input. The class beliefs are never materialised: every chunk goes through the *numpy* kernels of the core
+(eq. ``prob-semantics-final`` per chunk), and whatever couples the cells — the normaliser of p(s | z), the
+log-sum-exp of :func:`fuse`, the normaliser U and the entropy H(S) of the information gain — is a global dask
+reduction. Only cell-sized intermediates (1/k of the beliefs: weights, log-posteriors) wait for a reduction;
+dask spills them to disk if a worker's memory runs short. The information gain needs the beliefs twice and
+reads them twice rather than holding them.
 A zarr-backed class-belief array works as is: ``dask.array.from_zarr(store)``.
 
 Validation is lazy too: the checks of the numpy path (finite, non-negative, normalised, compatible supports)
@@ -107,10 +110,10 @@ def _first(block, *checked):
 
 
 def _recomputed(x, after):
-    """``x`` recomputed from its sources once ``after`` is known (memory stays one chunk per worker thread).
+    """``x`` recomputed from its sources once ``after`` is known.
 
-    Without this, dask keeps every chunk of ``x`` that feeds a global reduction in memory until the reduction
-    is done — the whole map.
+    For a second pass over the class beliefs: without this, dask would keep every chunk that feeds the first
+    pass's global reduction in memory until the reduction is done — the whole (k times larger) map.
     """
     from dask.graph_manipulation import bind
 
@@ -191,9 +194,8 @@ def semantic_source_probability_dask(class_probs, source_likelihood, class_prior
         _positive_check, weights.sum(dtype=np.float64),
         "no cell can hold the source: every cell's class beliefs (times source_prior) give zero weight to the "
         "classes that source_likelihood allows", dtype=np.float64)
-    # the global normaliser is one reduction over all chunks; the weights are then recomputed chunk by chunk
-    # (bind) instead of being held in memory until the reduction ends
-    return (_recomputed(weights, total) / total).astype(weights.dtype)
+    # the global normaliser: one reduction over all chunks (the weights, 1/k of the beliefs, wait for it)
+    return (weights / total).astype(weights.dtype)
 
 
 # ---------------------------------------------------------------------------------------------- fuse
@@ -220,18 +222,23 @@ def _exp_block(log_p, norm, dtype):
         return np.exp(log_p - norm).astype(dtype, copy=False)
 
 
-def _lse_block(log_p):
-    """(max, Σ exp(log p − max)) of one chunk, shape (1,)*ndim + (2,)."""
+def _lse_block(log_p, *posteriors):
+    """One chunk's (max log p, Σ exp(log p − max), then Σ p_j for every posterior): shape (1,)*ndim + (2 + m,)."""
     mx = np.max(log_p)
     with np.errstate(invalid="ignore"):
         s = np.sum(np.exp(log_p - mx)) if np.isfinite(mx) else 0.0
-    return np.array([mx, s]).reshape((1,) * log_p.ndim + (2,))
+    sums = [np.sum(p, dtype=np.float64) for p in posteriors]
+    return np.array([mx, s, *sums]).reshape((1,) * log_p.ndim + (2 + len(posteriors),))
 
 
-def _norm_check(parts, *overlaps, m: int):
-    """log Σ_c exp(log p_c) from the chunks' (max, Σ exp(log p − max)); a conflict (−inf) is named as in the
-    numpy path of :func:`psgsl_pgm.fuse`."""
-    parts = np.asarray(parts, dtype=np.float64).reshape(-1, 2)
+def _norm_check(parts, *overlaps, m: int, names: tuple, dtypes: tuple):
+    """log Σ_c exp(log p_c) from the chunks' partial results of :func:`_lse_block`, after the numpy path's
+    checks of :func:`psgsl_pgm.fuse`: every input sums to 1; a conflict (−inf) names the disjoint pair."""
+    from ._validate import check_sums
+
+    parts = np.asarray(parts, dtype=np.float64).reshape(-1, 2 + len(names))
+    for j, (name, dt) in enumerate(zip(names, dtypes)):
+        check_sums(parts[:, 2 + j].sum(), name, dt)
     mx = parts[:, 0].max()
     if not np.isfinite(mx):
         for (i, j), overlap in zip(_pairs(m), overlaps):
@@ -249,37 +256,39 @@ def _pairs(m: int):
 
 
 def fuse_dask(*posteriors, prior=None):
-    """:func:`psgsl_pgm.fuse` when a posterior (or the prior) is a dask array; returns a lazy dask array."""
+    """:func:`psgsl_pgm.fuse` when a posterior (or the prior) is a dask array; returns a lazy dask array.
+
+    One pass over the inputs gives the log-sum-exp normaliser and every input's sum (checked to be 1); the
+    log-posterior chunks (cell-sized, like the inputs) wait for it and are then exponentiated.
+    """
     import dask.array as da
 
     first = next(p for p in (*posteriors, prior) if is_dask_array(p))
     if first.ndim < 1:
         raise ValueError(f"posteriors must have at least 1 dimension(s), got a dask array of shape {first.shape}")
-    arrays = []
+    arrays, names = [], []
     for j, p in enumerate(posteriors):
-        a = _as_dask(p, f"posteriors[{j}]", first) if (is_dask_array(p) or np.shape(p) == first.shape) else None
-        if a is None:
+        if not (is_dask_array(p) or np.shape(p) == first.shape):
             raise ValueError(f"posteriors[{j}] must have the shape of posteriors[0], {first.shape}, got shape "
                              f"{np.shape(p)}")
-        dt = _float_dtype(a, f"posteriors[{j}]")
-        sums = da.map_blocks(_sum_check, a.sum(dtype=np.float64), f"posteriors[{j}] (over all cells)", dt,
-                             dtype=np.float64)
-        arrays.append(_after(a, sums))
+        arrays.append(_as_dask(p, f"posteriors[{j}]", first))
+        names.append(f"posteriors[{j}] (over all cells)")
+    dtypes = [_float_dtype(a, n) for a, n in zip(arrays, names)]
     out_dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
     extra = []
     if prior is not None:
-        pr = _as_dask(prior, "prior", first).astype(np.float64)
-        total = da.map_blocks(_sum_check, pr.sum(dtype=np.float64), "prior (over all cells)", np.float64,
-                              dtype=np.float64)
-        extra = [_after(pr, total)]
+        extra = [_as_dask(prior, "prior", first).astype(np.float64)]
+        names.append("prior (over all cells)")
+        dtypes.append(np.dtype(np.float64))
     m = len(arrays)
     log_p = da.map_blocks(_log_block, *arrays, *extra, m=m, has_prior=prior is not None, dtype=np.float64)
-    parts = da.map_blocks(_lse_block, log_p, new_axis=log_p.ndim, chunks=(*((1,) * len(c) for c in log_p.chunks),
-                                                                           (2,)), dtype=np.float64)
+    width = 2 + len(names)
+    parts = da.map_blocks(_lse_block, log_p, *arrays, *extra, new_axis=log_p.ndim, dtype=np.float64,
+                          chunks=(*((1,) * len(c) for c in log_p.chunks), (width,)))
     overlaps = [((arrays[i] > 0) & (arrays[j] > 0)).any() for i, j in _pairs(m)]  # only read on a conflict
-    norm = da.map_blocks(_norm_check, parts.rechunk(-1), *overlaps, m=m, drop_axis=tuple(range(parts.ndim)),
-                         chunks=(), dtype=np.float64)  # log-sum-exp over all cells: one pass, one reduction
-    return da.map_blocks(_exp_block, _recomputed(log_p, norm), norm, out_dtype, dtype=out_dtype)
+    norm = da.map_blocks(_norm_check, parts.rechunk(-1), *overlaps, m=m, names=tuple(names), dtypes=tuple(dtypes),
+                         drop_axis=tuple(range(parts.ndim)), chunks=(), dtype=np.float64)
+    return da.map_blocks(_exp_block, log_p, norm, out_dtype, dtype=out_dtype)
 
 
 # ---------------------------------------------------------------------------------- information gain
@@ -391,7 +400,7 @@ def information_gain_dask(class_probs, source_likelihood, class_prior, *, olfact
                          None, gas, None, n, None, new_axes={two: 2}, adjust_chunks={i: 1 for i in cells},
                          concatenate=True, dtype=np.float64, meta=np.empty((0,) * (ndim + 1)))
     totals = da.map_blocks(_entropy, parts.sum(axis=cells), dtype=np.float64)  # (U, H(S)): global reductions
-    q2, f2 = _recomputed((q, f), totals) if f is not None else (_recomputed(q, totals), None)  # second pass
-    return da.blockwise(_gain_block, cells, q2, cells + (cls,), f2, f_index, totals, (two,), lik, None, prior, None,
+    q2 = _recomputed(q, totals)  # the second pass reads the beliefs again; f (cell-sized) is kept
+    return da.blockwise(_gain_block, cells, q2, cells + (cls,), f, f_index, totals, (two,), lik, None, prior, None,
                         gas, None, predictive, None, n, None, concatenate=True, dtype=np.float64,
                         meta=np.empty((0,) * ndim))
