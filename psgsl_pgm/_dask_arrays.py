@@ -3,7 +3,7 @@ r"""Semantic maps larger than memory: the core functions on dask arrays chunked 
 :func:`psgsl_pgm.semantic_source_probability`, :func:`psgsl_pgm.fuse` and
 :func:`psgsl_pgm.semantic_information_gain` dispatch here (one test at their top, :func:`is_dask_array`)
 when an input is a ``dask.array.Array``; they then return a lazy dask array of the cells' shape, chunked like
-the input. The class beliefs are never materialised: every chunk goes through the *numpy* kernels of the core
+the input. The class beliefs are never materialised: every chunk goes through the kernels of the numpy path
 (eq. ``prob-semantics-final`` per chunk), and whatever couples the cells — the normaliser of p(s | z), the
 log-sum-exp of :func:`fuse`, the normaliser U and the entropy H(S) of the information gain — is a global dask
 reduction. Only cell-sized intermediates (1/k of the beliefs: weights, log-posteriors) wait for a reduction;
@@ -148,16 +148,24 @@ def _class_chunks(q, k: int, name: str):
 
 
 def _semantic_block(q, lik, prior, gas, validate, block_info=None):
-    from ._semantic import semantic_source_probability
+    """w_c = Σ_i p(o_ci|z_c) ρ_i (float64) on one chunk, with the kernel and checks of the numpy path."""
+    from ._beliefs_check import check_belief_stats
+    from ._kernel import belief_weights
+    from ._ratios import class_ratio
 
-    try:  # the numpy path on one chunk: eq. prob-semantics-final, unnormalised (scale common to all chunks)
-        return semantic_source_probability(q, lik, prior, gas_probs=gas, normalize=False, validate=validate)
-    except ValueError as exc:
-        raise _relocate(exc, _offset(block_info), q.shape[:-1]) from None
+    ratio = class_ratio(lik, prior, gas)
+    q2 = np.ascontiguousarray(q.reshape(-1, q.shape[-1]))
+    w, stats = belief_weights(q2, ratio.rho, ratio.zero_prior.astype(np.float64))
+    if validate:
+        try:
+            check_belief_stats(q2, stats, ratio.zero_prior)
+        except ValueError as exc:
+            raise _relocate(exc, _offset(block_info), q.shape[:-1]) from None
+    return np.asarray(w, dtype=np.float64).reshape(q.shape[:-1])
 
 
 def semantic_weights_dask(class_probs, source_likelihood, class_prior, *, gas_probs=None, validate=True):
-    """Per-cell weights w_c = Σ_i p(o_ci|z_c) ρ_i (lazy), as ``semantic_source_probability(normalize=False)``."""
+    """Per-cell weights w_c = Σ_i p(o_ci|z_c) ρ_i (lazy, float64: the numpy path rounds once, at the end)."""
     import dask.array as da
 
     from ._ratios import class_ratio
@@ -168,8 +176,8 @@ def semantic_weights_dask(class_probs, source_likelihood, class_prior, *, gas_pr
     lik = np.asarray(source_likelihood, dtype=np.float64)
     gas = None if gas_probs is None else np.asarray(gas_probs, dtype=np.float64)
     prior = np.asarray(class_prior, dtype=np.float64)
-    return da.map_blocks(_semantic_block, q, lik, prior, gas, validate, drop_axis=q.ndim - 1, dtype=dtype,
-                         meta=np.empty((0,) * (q.ndim - 1), dtype=dtype))
+    return da.map_blocks(_semantic_block, q, lik, prior, gas, validate, drop_axis=q.ndim - 1, dtype=np.float64,
+                         meta=np.empty((0,) * (q.ndim - 1)))
 
 
 def semantic_source_probability_dask(class_probs, source_likelihood, class_prior, *, gas_probs=None,
@@ -179,23 +187,23 @@ def semantic_source_probability_dask(class_probs, source_likelihood, class_prior
 
     from ._semantic import column_sum
 
+    dtype = _float_dtype(class_probs, "class_probs")  # float32 in, float32 out (rounded once, at the end)
     weights = semantic_weights_dask(class_probs, source_likelihood, class_prior, gas_probs=gas_probs,
                                     validate=validate)
     if source_prior is not None:
-        prior = _as_dask(source_prior, "source_prior", weights)
-        if _float_dtype(prior, "source_prior") != prior.dtype:
-            prior = prior.astype(_float_dtype(prior, "source_prior"))
-        total = da.map_blocks(_sum_check, prior.sum(dtype=np.float64), "source_prior", prior.dtype, dtype=np.float64)
+        prior = _as_dask(source_prior, "source_prior", weights).astype(np.float64)
+        total = da.map_blocks(_sum_check, prior.sum(dtype=np.float64), "source_prior", _float_dtype(
+            source_prior, "source_prior"), dtype=np.float64)
         weights = _after(weights * prior, total)  # p(s_c) p(z | s_c)
     weights = column_sum(weights, column_axis, weights.ndim)  # Σ_{v∈c} p(s_v | z): a dask reduction
     if not normalize:
-        return weights
+        return weights.astype(dtype)
     total = da.map_blocks(
         _positive_check, weights.sum(dtype=np.float64),
         "no cell can hold the source: every cell's class beliefs (times source_prior) give zero weight to the "
         "classes that source_likelihood allows", dtype=np.float64)
     # the global normaliser: one reduction over all chunks (the weights, 1/k of the beliefs, wait for it)
-    return (weights / total).astype(weights.dtype)
+    return (weights / total).astype(dtype)
 
 
 # ---------------------------------------------------------------------------------------------- fuse
@@ -294,21 +302,14 @@ def fuse_dask(*posteriors, prior=None):
 # ---------------------------------------------------------------------------------- information gain
 
 
-def _gain_products(q, source_likelihood, class_prior, gas_probs, validate):
-    """The numpy path's per-cell raw moments of one chunk (see :mod:`psgsl_pgm._infogain`)."""
+def _gain_inputs(lik, prior, gas):
+    """ρ, ρ log ρ and the zero-prior mask, as the numpy path of the information gain builds them."""
     from scipy.special import xlogy
 
-    from . import _infogain as ig
-    from ._beliefs_check import belief_products
     from ._ratios import class_ratio
 
-    ratio = class_ratio(source_likelihood, class_prior, gas_probs)
-    rho = ratio.rho
-    rho_log_rho = xlogy(rho, rho)
-    powers = rho[:, None] ** np.arange(1, ig._ORDER + 1)
-    log_powers = rho_log_rho[:, None] * rho[:, None] ** np.arange(ig._ORDER)
-    bp = belief_products(q, np.hstack([powers, log_powers]), zero_prior=ratio.zero_prior, validate=validate)
-    return rho, bp, bp.products.astype(np.float64, copy=False)
+    ratio = class_ratio(lik, prior, gas)
+    return ratio.rho, xlogy(ratio.rho, ratio.rho), ratio.zero_prior.astype(np.float64)
 
 
 def _validated_block(q, lik, prior, gas, block_info=None):
@@ -317,45 +318,40 @@ def _validated_block(q, lik, prior, gas, block_info=None):
     return q
 
 
+def _olfactory_chunk(f, n: int):
+    """The kernels' olfactory arguments for one chunk: (f flat, 0) or (empty, 1/n) for the uniform prior."""
+    if f is None:
+        return np.empty(0), 1.0 / n
+    return np.ascontiguousarray(f, dtype=np.float64).reshape(-1), 0.0
+
+
 def _gain_totals_block(q, f, lik, prior, gas, n):
     """Partial sums of U = Σ f_c w_c and Σ xlogy(f_c w_c, f_c w_c) over one chunk: shape (1,)*ndim + (2,)."""
     from scipy.special import xlogy
 
-    _, bp, raw = _gain_products(q, lik, prior, gas, False)
-    w = raw[:, 0]
-    fc = np.full(w.shape[0], 1.0 / n) if f is None else np.asarray(f, dtype=np.float64).reshape(-1)
-    fw = fc * w
+    from ._kernel import belief_moments
+
+    rho, rho_log_rho, zero = _gain_inputs(lik, prior, gas)
+    fc, fu = _olfactory_chunk(f, n)
+    # the same w_n as the numpy path's (belief_weights accumulates differently for float32 beliefs)
+    w, _, _ = belief_moments(np.ascontiguousarray(q.reshape(-1, q.shape[-1])), rho, rho_log_rho, zero, fc, fu, False)
+    fw = (fc if fc.size else fu) * np.asarray(w, dtype=np.float64)
     return np.array([fw.sum(), xlogy(fw, fw).sum()]).reshape((1,) * (q.ndim - 1) + (2,))
 
 
 def _gain_block(q, f, totals, lik, prior, gas, predictive, n):
-    """I(S; O_n) on one chunk given the map's U and H(S): the numpy path's formulas per cell."""
-    from scipy.special import xlogy
-
+    """I(S; O_n) on one chunk given the map's U and H(S), with the kernels of the numpy path."""
     from . import _infogain as ig
+    from ._kernel import belief_moments, gain_from_moments
 
-    rho, bp, raw = _gain_products(q, lik, prior, gas, False)  # checked in the first pass
-    total, entropy = float(totals[0]), float(totals[1])
-    J = ig._ORDER
-    raw_nu = raw[:, J:]
-    w, v = raw[:, 0], raw_nu[:, 0]
-    fc = np.full(w.shape[0], 1.0 / n) if f is None else np.asarray(f, dtype=np.float64).reshape(-1)
-    a = fc / total
-    jensen = v - xlogy(w, w)
-    spread = np.maximum(rho.max() - w, w - rho.min())
-    series = a * spread <= ig._RADIUS
-    gain = np.empty(w.shape[0])
-    moments = raw.T
-    if np.any(series):
-        idx = np.flatnonzero(series)
-        gain[idx] = ig._series_gain(a[idx], w[idx], jensen[idx], np.ascontiguousarray(moments[:, idx]), entropy,
-                                    predictive)
-    if not np.all(series):
-        idx = np.flatnonzero(~series)
-        gain[idx] = ig._elementwise_gain(bp.q, idx, rho, a, w, jensen, entropy, predictive)
-    if predictive == "exact":
-        np.maximum(gain, 0.0, out=gain)
-    return gain.reshape(bp.cell_shape)
+    rho, rho_log_rho, zero = _gain_inputs(lik, prior, gas)
+    q2 = np.ascontiguousarray(q.reshape(-1, q.shape[-1]))
+    fc, fu = _olfactory_chunk(f, n)
+    paper = predictive == "paper"
+    w, moments, _ = belief_moments(q2, rho, rho_log_rho, zero, fc, fu, paper)  # checked in the first pass
+    total, entropy = float(totals[0]), float(totals[1]) if paper else 0.0
+    gain = gain_from_moments(q2, w, moments, fc, fu, total, rho, rho_log_rho, entropy, ig._RADIUS, paper)
+    return gain.reshape(q.shape[:-1])
 
 
 def _entropy(parts):
@@ -371,7 +367,8 @@ def information_gain_dask(class_probs, source_likelihood, class_prior, *, olfact
     """:func:`psgsl_pgm.semantic_information_gain` for a dask ``class_probs``: a lazy float64 dask array.
 
     Two passes over the beliefs: one global reduction for U = Σ_c f_c w_c and H(S), then the per-cell gain of
-    every chunk with the numpy kernels of :mod:`psgsl_pgm._infogain`.
+    every chunk with the kernels of the numpy path (:mod:`psgsl_pgm._kernel`, as :mod:`psgsl_pgm._infogain`
+    calls them).
     """
     import dask.array as da
 

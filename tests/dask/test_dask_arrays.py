@@ -141,7 +141,7 @@ def test_a_zarr_class_belief_array_end_to_end(onto, tmp_path):
     g = rng.dirichlet(np.ones(3000))
     post = fuse(g, semantic_source_probability(dq, lik, prior))
     da.to_zarr(post.rechunk(256), str(tmp_path / "posterior.zarr"))  # streamed to disk chunk by chunk
-    _close(np.asarray(zarr.open_array(str(tmp_path / "posterior.zarr"), mode="r")),
-           fuse(g, semantic_source_probability(q, lik, prior)), np.float64)
+    _close(np.asarray(zarr.open_array(str(tmp_path / "posterior.zarr"), mode="r")),  # p(s | z) is float32 here
+           fuse(g, semantic_source_probability(q, lik, prior)), np.float32)
     _close(semantic_information_gain(dq, lik, prior, olfactory=g).compute(),
            semantic_information_gain(q, lik, prior, olfactory=g), np.float64)
