@@ -51,6 +51,7 @@ class _PeakRSS(threading.Thread):
 
 
 @pytest.mark.slow
+@pytest.mark.huge
 def test_a_zarr_map_larger_than_worker_memory_streams_in_bounded_memory(tmp_path):
     zarr = pytest.importorskip("zarr", reason="zarr is not installed (pip install 'psgsl-pgm[dask]')")
     pytest.importorskip("psutil", reason="psutil measures the workers' memory")
