@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..sim import default_house
+
 from ._config import parse_source
 
 __all__ = ["check_sources"]
@@ -37,7 +39,6 @@ def check_sources(sources, *, seeds=(0,), house=None) -> list:
         An unknown class (naming the classes present) or a position outside the map or in an occupied cell
         (naming the map's extent).
     """
-    from ..sim import default_house
 
     specs = [parse_source(s) for s in sources]
     if house is None:

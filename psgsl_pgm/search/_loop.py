@@ -21,6 +21,9 @@ import numpy as np
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ..experiment._metrics import error_and_spread
+from ..experiment._step import VariantPosteriors, visit
+from ..experiment._tour import exploration_tour
+from ..sim import default_world
 from ._metrics import credible_region
 from ._policies import POLICIES, Situation, choose
 from ._space import FreeSpace
@@ -211,9 +214,6 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     -------
     SearchRun
     """
-    from ..experiment._step import VariantPosteriors, visit
-    from ..experiment._tour import exploration_tour
-    from ..sim import default_world
 
     config = ExperimentConfig() if config is None else config
     search = SearchConfig() if search is None else search

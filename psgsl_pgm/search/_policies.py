@@ -37,6 +37,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import entr
 
+from .._infogain import semantic_information_gain
+
 __all__ = ["Decision", "POLICIES", "Situation", "choose", "olfactory_gain", "score_per_time", "travel_time"]
 
 #: Policies of the closed loop.
@@ -150,7 +152,6 @@ def _view_information(sit: Situation, cells) -> np.ndarray:
     """φ_O for every candidate × heading (zeros for the olfaction variant)."""
     if sit.variant == "olfaction":
         return np.zeros((len(cells), len(sit.space.headings)))
-    from .._infogain import semantic_information_gain
 
     b = sit.beliefs
     gain = semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,

@@ -21,6 +21,7 @@ import numpy as np
 from scipy import ndimage as ndi
 from scipy.sparse.csgraph import dijkstra
 
+from .._fov import field_of_view
 from .._grid import free_space_graph
 
 __all__ = ["FreeSpace"]
@@ -182,7 +183,6 @@ class FreeSpace:
         hit = _VIEW_CACHE.get(key)
         if hit is not None:
             return hit
-        from .. import field_of_view
 
         x, y = self.centres[int(cell)]
         cam, g = self.camera, self.grid

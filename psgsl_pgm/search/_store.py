@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._grid_runner import atomic_write
 from ..experiment._config import source_label
 from ._loop import SearchRun
 
@@ -32,7 +33,6 @@ def write_search_run(run: SearchRun, fh) -> None:
 
 def save_search_run(run: SearchRun, path) -> Path:
     """Write ``run`` to ``path`` atomically (:func:`psgsl_pgm._grid_runner.atomic_write`)."""
-    from .._grid_runner import atomic_write
 
     return atomic_write(path, write_search_run, run)
 

@@ -41,10 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .._class_maps import read_class_beliefs
 from .._coco import canonical_class
 from ._fileio import check_keys, number, number_list, read_grey_image, read_yaml_mapping, resolve
 from .._grid import GridMap
+from .._ontology import Ontology
 from ._house import House, default_house, segment_mask
+from ._house_ontology import house_ontology
 from ._objects import SceneObject, load_objects
 from ._resample import coarsen_factor, coarsen_labels, coarsen_occupancy
 from ._roommap import load_room_map
@@ -287,8 +290,6 @@ def _inner(where: str, key: str, exc: Exception) -> ValueError:
 
 
 def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
-    from .._ontology import Ontology
-
     builtin = data.get("builtin")
     if builtin is not None:
         if builtin != "default_house":
@@ -308,8 +309,6 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
     if data["ontology"] == "house":
         if "room_classes" in data:
             raise ValueError(f"{where}: key 'room_classes' cannot refine the built-in 'house' ontology")
-        from ..experiment._ontology import house_ontology
-
         ontology = house_ontology()
     else:
         opath = _file(wpath, data, "ontology")
@@ -358,7 +357,6 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
 
     beliefs = None
     if "semantic_map" in data:
-        from .._class_maps import read_class_beliefs
 
         p = _file(wpath, data, "semantic_map")
         try:

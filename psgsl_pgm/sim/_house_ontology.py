@@ -9,7 +9,7 @@ import numpy as np
 
 from .._ontology import Ontology
 from .._yaml import load_yaml
-from ..sim import default_house
+from ._house import default_house
 
 __all__ = ["house_ontology"]
 
