@@ -9,6 +9,7 @@ from pathlib import Path
 __all__ = ["add_parser", "run"]
 
 _SETTINGS = ((1.0, 1.0), (2.0, 2.0), (3.0, 1.0))
+_DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def _positive_int(text):
@@ -44,8 +45,11 @@ def add_parser(subparsers):
     workers = min(2, os.cpu_count() or 1)
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
-    p.add_argument("--sources", nargs="+", default=["oven", "bed", "5.0,6.0"],
-                   help="object class names or 'x,y' positions (default: %(default)s)")
+    p.add_argument("--world", default=None, help="world file: your own house (see README 'Your own house'); "
+                   "default: the embedded house")
+    p.add_argument("--sources", nargs="+", default=None,
+                   help="object class names, 'x,y' positions or the world file's source names (default: the "
+                   "world's sources; for the embedded house oven bed 5.0,6.0)")
     p.add_argument("--policies", nargs="+", choices=POLICIES, default=["tour", "infotaxis", "space-aware-infotaxis"],
                    help="policies (default: %(default)s)")
     p.add_argument("--variants", nargs="+", choices=VARIANTS, default=["olfaction", "semantics+rooms"],
@@ -128,15 +132,27 @@ def _run(args) -> int:
         return _open_space(args)
     from ._cli_grid import interrupted
     from ._grid_runner import GridInterrupted
-    from .experiment import parse_source
+    from .experiment import ExperimentConfig, parse_source
     from .search import SearchConfig
     from .search._grid import run_search_grid
 
-    sources = [parse_source(s) for s in args.sources]  # ValueError -> one line, exit 2
+    spec = None
+    if args.world is not None:
+        from .sim import load_world
+
+        spec = load_world(args.world)  # a bad world file: ValueError -> one line, exit 2, nothing written
+    names = args.sources
+    if names is None:
+        names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
+        if not names:
+            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+    sources = [parse_source(s) for s in names]  # ValueError -> one line, exit 2
+    config = ExperimentConfig(gas=spec.gas) if spec is not None and spec.gas else ExperimentConfig()
     try:
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),
                                     out=args.out, workers=args.workers, search=SearchConfig(time_budget=args.budget),
-                                    progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler)
+                                    config=config, progress=not args.quiet, figures=not args.no_figures,
+                                    scheduler=args.scheduler, world=args.world)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     for key, summary in summaries.items():

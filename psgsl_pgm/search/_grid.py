@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
+from ..experiment._driver import _world
 from ..experiment._metrics import mean_ci
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import paired_difference, wilson_interval
@@ -21,8 +22,23 @@ from ._store import load_search_run, search_run_path, write_search_run
 __all__ = ["run_search_grid", "summarize_runs", "write_search_outputs"]
 
 
-def _config_of(config: ExperimentConfig, search: SearchConfig) -> dict:
-    return {"experiment": config.to_dict(), "search": search.to_dict()}
+def _config_of(config: ExperimentConfig, search: SearchConfig, world=None) -> dict:
+    """The settings a stored run is checked against; a world file's path is part of them (None: the embedded
+    house, and no "world" key, so that runs stored before world files still resume)."""
+    out = {"experiment": config.to_dict(), "search": search.to_dict()}
+    if world is not None:
+        out["world"] = str(world)
+    return out
+
+
+def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None, **kwargs):
+    """:func:`run_closed_loop` in the world of the world file ``world`` (a resolved path, picklable for worker
+    processes; None: the embedded house). The stored run's config names the world file."""
+    if world is None:
+        return run_closed_loop(source, seed, policy, variant, estimator, **kwargs)
+    run = run_closed_loop(source, seed, policy, variant, estimator, world_spec=_world(world), **kwargs)
+    run.config["world"] = str(world)
+    return run
 
 
 def summarize_runs(runs) -> dict:
@@ -116,10 +132,11 @@ def _write_csv(runs, path: Path) -> None:
     os.replace(tmp, path)
 
 
-def write_search_outputs(out, *, figures: bool = True) -> dict:
+def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
     """Aggregate every run stored in ``out/runs``: per source × estimator a folder with ``summary.json``
     (one entry per ``"<policy>/<variant>"``), ``paired.json``, ``runs.csv`` and figures; plus ``out/summary.json``
-    (``{"<source>/<estimator>": {"<policy>/<variant>": ...}}``) and ``out/runs.csv`` over all of them."""
+    (``{"<source>/<estimator>": {"<policy>/<variant>": ...}}``) and ``out/runs.csv`` over all of them.
+    ``world`` is the runs' world file (default: the embedded house), whose house the path figures draw."""
     out = Path(out)
     files = sorted((out / "runs").glob("*.npz"))
     runs = [load_search_run(f) for f in files]
@@ -142,7 +159,6 @@ def write_search_outputs(out, *, figures: bool = True) -> dict:
         if figures:
             import matplotlib.pyplot as plt
 
-            from ..sim import default_house
             from ._figures import plot_paths, plot_survival
 
             fig = plot_survival(by_key, title=f"source {source}, estimator {estimator}")
@@ -150,7 +166,8 @@ def write_search_outputs(out, *, figures: bool = True) -> dict:
             plt.close(fig)
             seed = min(r.seed for v in by_key.values() for r in v)
             shown = {k: next(r for r in v if r.seed == seed) for k, v in by_key.items() if any(r.seed == seed for r in v)}
-            fig = plot_paths(shown, default_house(seed), title=f"source {source}, estimator {estimator}, seed {seed}")
+            fig = plot_paths(shown, _world(world).house(seed),
+                             title=f"source {source}, estimator {estimator}, seed {seed}")
             fig.savefig(folder / "paths.png", dpi=110)
             plt.close(fig)
     _write_json(top, out / "summary.json")
@@ -158,13 +175,19 @@ def write_search_outputs(out, *, figures: bool = True) -> dict:
     return top
 
 
-def _check_sources(sources) -> None:
-    """Fail before any work: a class name must have an object in the house, a position must be a free cell."""
+def _check_sources(sources, world_spec=None) -> None:
+    """Fail before any work: a class name must have an object in the house, a position must be a free cell.
+    With a world (:func:`psgsl_pgm.load_world`) its house is checked and its source names are resolved."""
     from ..sim import default_house
 
-    house = default_house(0)
+    house = default_house(0) if world_spec is None else world_spec.house(0)
     for spec in sources:
         spec = parse_source(spec)
+        if world_spec is not None:
+            spec = world_spec.source_spec(spec)
+            if isinstance(spec, str):
+                world_spec.resolve_source(spec, house)  # lumped classes ("other") resolved as the runs do
+                continue
         if isinstance(spec, str):
             if not house.objects_of_class(spec):
                 raise ValueError(f"source class {spec!r} has no object in the house; classes present: "
@@ -180,7 +203,8 @@ def _check_sources(sources) -> None:
 def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=("olfaction", "semantics+rooms"),
                     estimators=("infotaxis",), seeds=range(10), *, out, workers: int = 2,
                     config: ExperimentConfig | None = None, search: SearchConfig | None = None,
-                    progress: bool = True, figures: bool = True, grid=None, scheduler: str | None = None) -> dict:
+                    progress: bool = True, figures: bool = True, grid=None, scheduler: str | None = None,
+                    world=None) -> dict:
     """Run every (source, policy, variant, estimator, seed) not yet on disk, then aggregate ``out``.
 
     Jobs are submitted seed by seed (all combinations of seed 0, then of seed 1, …), so that an interrupted grid
@@ -189,7 +213,9 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     (e.g. the tour with one variant only: its path does not depend on the variant). ``scheduler``: the grid
     runner's backend (:func:`psgsl_pgm._grid_runner.run_grid`: None = a local pool of ``workers`` processes,
     "local" = a dask LocalCluster, or a dask scheduler's address); Ctrl-C raises
-    :class:`psgsl_pgm._grid_runner.GridInterrupted` with every finished run on disk.
+    :class:`psgsl_pgm._grid_runner.GridInterrupted` with every finished run on disk. ``world`` (keyword-only):
+    a world file (:func:`psgsl_pgm.load_world`; sources may then be its source names), loaded and checked
+    before any output is written; default: the embedded house.
 
     Finished runs live in ``out/runs`` (one atomic file each) and are never redone; a stored run with another
     configuration is an error. Aggregation covers every run stored in ``out/runs``
@@ -215,10 +241,12 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
             if p not in POLICIES or v not in VARIANTS or e not in ESTIMATORS:
                 raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
                                  f"estimator of {ESTIMATORS}, got {(p, v, e)}")
-    _check_sources({g[0] for g in grid})
+    world = None if world is None else str(Path(world).resolve())
+    world_spec = None if world is None else _world(world)  # a bad world file fails here, before any output
+    _check_sources({g[0] for g in grid}, world_spec)
     out = Path(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    want = json.loads(json.dumps(_config_of(config, search)))
+    want = json.loads(json.dumps(_config_of(config, search, world)))
     from .._grid_runner import GridJob, run_grid
 
     def check_done(job) -> None:
@@ -227,9 +255,10 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
             raise ValueError(f"{job.path} was computed with another configuration ({stored}); use a new output "
                              "directory or delete the stored runs")
 
-    jobs = [GridJob(search_run_path(out, source, policy, variant, estimator, seed), run_closed_loop,
-                    (source, seed, policy, variant, estimator), {"config": config, "search": search})
+    jobs = [GridJob(search_run_path(out, source, policy, variant, estimator, seed),
+                    closed_loop_in_world, (source, seed, policy, variant, estimator),
+                    {"config": config, "search": search, "world": world})
             for source, policy, variant, estimator, seed in grid]
     run_grid(jobs, write=write_search_run, check_done=check_done, scheduler=scheduler, workers=workers,
              progress=progress, desc="closed-loop runs")
-    return write_search_outputs(out, figures=figures)
+    return write_search_outputs(out, figures=figures, world=world)

@@ -1,0 +1,59 @@
+"""`psgsl search --world`: the closed-loop grid on a world file (its sources, its house, its path in the stored
+config, so that runs of another world in the same output directory are refused)."""
+
+import json
+from pathlib import Path
+
+import yaml
+
+import psgsl_pgm
+from psgsl_pgm._cli import main
+
+HOUSE = Path(psgsl_pgm.__file__).parent / "data" / "worlds" / "house.yaml"
+
+
+def write_world(d, **over):
+    """The packaged embedded house with its own source names."""
+    world = yaml.safe_load(HOUSE.read_text())
+    world["sources"] = {"stove": "oven"}
+    world.update(over)
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "world.yaml").write_text(yaml.safe_dump(world))
+    return d / "world.yaml"
+
+
+def _args(world, out, *extra):
+    return ["search", "--world", str(world), "--seeds", "1", "--policies", "tour", "--variants", "olfaction",
+            "--budget", "30", "--workers", "1", "--no-figures", "--quiet", "--out", str(out), *extra]
+
+
+def test_search_command_with_a_world(tmp_path):
+    world = write_world(tmp_path / "w1")
+    out = tmp_path / "out"
+    assert main(_args(world, out)) == 0  # without --sources: the world's sources
+    top = json.loads((out / "summary.json").read_text())
+    assert set(top) == {"stove/infotaxis"}
+    assert set(top["stove/infotaxis"]) == {"tour/olfaction"}
+    assert top["stove/infotaxis"]["tour/olfaction"]["n_runs"] == 1
+    # the stored run names its world: another world file in the same output directory is refused
+    other = write_world(tmp_path / "w2")
+    assert main(_args(other, out)) == 2
+    assert main(_args(world, out)) == 0  # the same world resumes
+
+
+def test_a_bad_world_file_is_one_line_and_exit_2(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("map: nowhere.yaml\n")
+    out = tmp_path / "out"
+    assert main(_args(bad, out)) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.yaml" in err[0]
+    assert not out.exists()
+
+
+def test_an_unknown_source_name_is_refused_before_any_run(tmp_path, capsys):
+    world = write_world(tmp_path)
+    out = tmp_path / "out"
+    assert main(_args(world, out, "--sources", "piano")) == 2
+    assert "piano" in capsys.readouterr().err
+    assert not out.exists()
