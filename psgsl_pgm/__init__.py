@@ -10,7 +10,8 @@ Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on fu
 * :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
   :class:`ClassBeliefMap` — the robot's dense class beliefs over cells or voxels, frame by frame;
 * :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
-  φ_O(p) (Sec. "Information Gain Optimization");
+  φ_O(p) (Sec. "Information Gain Optimization"); :class:`ViewCache` — the camera's line of sight cast once per
+  cell of a map and reused for every pose;
 * :class:`GridMap` — the occupancy grid every part of the package shares (frame, cell <-> world, coarsening,
   8-connected free-space graph, the one light-tight line of sight);
 * :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts;
@@ -24,7 +25,7 @@ Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian net
 
 from ._beliefs import room_evidence, update_class_probs
 from ._class_beliefs import ClassBeliefMap
-from ._fov import field_of_view, view_information_gain
+from ._fov import ViewCache, field_of_view, view_information_gain
 from ._fusion import fuse
 from ._grid import GridMap
 from ._infogain import semantic_information_gain
@@ -47,6 +48,7 @@ __all__ = [
     "ClassBeliefMap",
     "GridMap",
     "Ontology",
+    "ViewCache",
     "field_of_view",
     "fuse",
     "kitchen_example",

@@ -6,28 +6,25 @@ navigable and within ``horizon`` metres of the robot *along the free-space graph
 cell, each with ``n_headings`` camera headings.
 
 Views: the camera sees F_p = field_of_view(p) ∩ free (what :meth:`psgsl_pgm.sim.Camera.visible` returns). The
-line of sight does not depend on the heading, so the cells in line of sight within range are computed once
-per position (a full circle) and split into the heading sectors by the same bearing test as
-:func:`psgsl_pgm.field_of_view`; the result is cached per position (walls do not move; the camera's
-occupancy is the same for every seed of the house).
+line of sight does not depend on the heading: it comes from the core's :class:`psgsl_pgm.ViewCache` of the
+house and camera (shared by every run in the process: walls do not move, and the camera's occupancy is the
+same for every seed), and is split into the heading sectors by the same cone test as
+:func:`psgsl_pgm.field_of_view`.
 """
 
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 
 import numpy as np
 from scipy import ndimage as ndi
 from scipy.sparse.csgraph import dijkstra
 
-from .._fov import field_of_view
+from .._fov import ViewCache
 from .._grid import free_space_graph
 
 __all__ = ["FreeSpace"]
 
-_VIEW_CACHE: dict = {}  # (occupancy hash, camera, headings, cell) -> (flat cells, (n_headings, m) bool sectors)
-_VIEW_CACHE_MAX = 4096
 
 
 class FreeSpace:
@@ -82,11 +79,9 @@ class FreeSpace:
         self._dist_cache: OrderedDict = OrderedDict()
         self._discs: dict = {}
         self._dist_cache_max = int(distance_cache)
-        occ = np.ascontiguousarray(grid.occupancy)
-        self._view_key = (hashlib.sha1(occ.tobytes()).hexdigest(), occ.shape, self.resolution,
-                          tuple(np.asarray(grid.origin, float).tolist()), float(camera.max_range),
-                          float(camera.min_range), float(camera.half_angle), int(n_headings),
-                          hashlib.sha1(np.ascontiguousarray(grid.free).tobytes()).hexdigest())
+        self._sight = ViewCache.shared(grid.occupancy, max_range=camera.max_range, half_angle=camera.half_angle,
+                                       min_range=camera.min_range, resolution=grid.resolution, origin=grid.origin)
+        self._views: dict = {}  # cell -> (flat cells, (n_headings, m) bool sectors)
 
     # --- cells and positions ------------------------------------------------------------------------------
     def cell_of(self, xy) -> int:
@@ -179,28 +174,20 @@ class FreeSpace:
         sectors : (n_headings, m) ndarray of bool
             Which of them are inside the opening angle at each of :attr:`headings`.
         """
-        key = self._view_key + (int(cell),)
-        hit = _VIEW_CACHE.get(key)
+        cell = int(cell)
+        hit = self._views.get(cell)
         if hit is not None:
             return hit
-
-        x, y = self.centres[int(cell)]
-        cam, g = self.camera, self.grid
-        seen = field_of_view(g.occupancy, (x, y, 0.0), max_range=cam.max_range, half_angle=np.pi,
-                             min_range=cam.min_range, resolution=g.resolution, origin=g.origin)
-        flat = np.flatnonzero(seen.ravel() & self.free)
-        w = self.nav.shape[1]
-        rows, cols = np.divmod(flat, w)
-        col0, row0 = (x - g.origin[0]) / g.resolution, (y - g.origin[1]) / g.resolution
-        dx, dy = (cols + 0.5 - col0) * g.resolution, (rows + 0.5 - row0) * g.resolution
-        angle = np.arctan2(dy, dx)
-        bearing = np.angle(np.exp(1j * (angle[None, :] - self.headings[:, None])))  # as in field_of_view
-        sectors = (np.abs(bearing) <= cam.half_angle) | (np.hypot(dx, dy) < 1e-12 * g.resolution)[None, :]
+        x, y = self.centres[cell]
+        rows, cols = self._sight.sight(divmod(cell, self.nav.shape[1]))
+        around = (x, y, 0.0)
+        keep = self._sight.cone(around, rows, cols, any_heading=True) & self.free[rows * self.nav.shape[1] + cols]
+        rows, cols = rows[keep], cols[keep]
+        flat = rows.astype(np.int64) * self.nav.shape[1] + cols
+        sectors = np.stack([self._sight.cone((x, y, h), rows, cols) for h in self.headings])
         flat.flags.writeable = False
         sectors.flags.writeable = False
-        if len(_VIEW_CACHE) >= _VIEW_CACHE_MAX:
-            _VIEW_CACHE.pop(next(iter(_VIEW_CACHE)))
-        _VIEW_CACHE[key] = (flat, sectors)
+        self._views[cell] = (flat, sectors)
         return flat, sectors
 
     def view_gain(self, gain_flat: np.ndarray, cells) -> np.ndarray:

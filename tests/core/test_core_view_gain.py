@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from psgsl_pgm import field_of_view, view_information_gain
+from psgsl_pgm import ViewCache, field_of_view, view_information_gain
 
 
 def _house_like(rng, h=40, w=50):
@@ -49,3 +49,34 @@ def test_full_circle_and_bad_poses():
         view_information_gain(gain, occ, np.array([[1.0, 1.0, 0.0], [100.0, 1.0, 0.0]]), **fov)
     with pytest.raises(ValueError, match=r"pose must be \(3,\) or \(P, 3\)"):
         view_information_gain(gain, occ, np.zeros((2, 2)), **fov)
+
+
+def test_view_cache_equals_field_of_view_for_every_pose_and_stays_within_its_memory_bound():
+    rng = np.random.default_rng(2)
+    occ = _house_like(rng)
+    res = 0.1
+    fov = dict(max_range=1.2, half_angle=np.deg2rad(50.0), min_range=0.15, resolution=res)
+    views = ViewCache(occ, **fov, max_bytes=40_000)
+    free = np.argwhere(~occ)
+    for r, c in free[rng.choice(len(free), 40, replace=False)]:
+        pose = ((c + rng.random()) * res, (r + rng.random()) * res, rng.uniform(-np.pi, np.pi))
+        np.testing.assert_array_equal(views.field_of_view(pose), field_of_view(occ, pose, **fov))
+    assert views._bytes <= 40_000 or len(views._sight) == 1
+    assert sum(r.size * 8 for r, _ in views._sight.values()) == views._bytes
+    assert ViewCache.shared(occ.copy(), **fov) is ViewCache.shared(occ, **fov)
+    assert ViewCache.shared(~occ, **fov) is not ViewCache.shared(occ, **fov)
+
+
+@pytest.mark.parametrize("heading", [0.0, np.pi / 2, np.pi, -np.pi / 2])
+def test_cells_exactly_on_the_cone_boundary_are_inside(heading):
+    # a 90° camera looking along an axis: the diagonal cells lie exactly on the boundary (closed)
+    occ = np.zeros((9, 9), bool)
+    seen = field_of_view(occ, (4.5, 4.5, heading), max_range=3.0, half_angle=np.pi / 4)
+    d = np.array([np.cos(heading), np.sin(heading)]).round().astype(int)  # forward, (dx, dy) in cells
+    side = np.array([-d[1], d[0]])
+    for s in (1, -1):
+        for k in (1, 2):  # bearing exactly ±45°
+            dx, dy = k * d + s * k * side
+            assert seen[4 + dy, 4 + dx]
+        dx, dy = d + s * 2 * side  # bearing ±63.4°
+        assert not seen[4 + dy, 4 + dx]
