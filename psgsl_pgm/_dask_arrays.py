@@ -11,6 +11,10 @@ dask spills them to disk if a worker's memory runs short. The information gain n
 reads them twice rather than holding them.
 A zarr-backed class-belief array works as is: ``dask.array.from_zarr(store)``.
 
+:class:`psgsl_pgm.ClassBeliefMap` builds its dask-backed maps here too: the beliefs as given (checked per chunk,
+float64), the prior or the room evidence broadcast over chunked cells, and the cells an update touched spliced
+into the lazy beliefs (only their chunks change; :func:`read_cells_dask` reads those cells' rows once).
+
 Validation is lazy too: the checks of the numpy path (finite, non-negative, normalised, compatible supports)
 run per chunk, or on the global reductions, when the result is computed, and raise the same ValueError
 (cell indices are global). Shapes, dtypes and the ontology inputs are checked at once.
@@ -22,7 +26,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["fuse_dask", "information_gain_dask", "is_dask_array", "semantic_source_probability_dask"]
+__all__ = [
+    "broadcast_cells_dask",
+    "class_beliefs_dask",
+    "fresh_handle",
+    "fuse_dask",
+    "information_gain_dask",
+    "is_dask_array",
+    "read_cells_dask",
+    "room_beliefs_dask",
+    "semantic_source_probability_dask",
+    "splice_cells_dask",
+]
 
 
 def is_dask_array(x) -> bool:
@@ -401,3 +416,127 @@ def information_gain_dask(class_probs, source_likelihood, class_prior, *, olfact
     return da.blockwise(_gain_block, cells, q2, cells + (cls,), f, f_index, totals, (two,), lik, None, prior, None,
                         gas, None, predictive, None, n, None, concatenate=True, dtype=np.float64,
                         meta=np.empty((0,) * ndim))
+
+
+# ------------------------------------------------------------------------------------ class-belief maps
+
+
+def _dask_array_module():
+    """``dask.array``, or a ModuleNotFoundError naming the extra that provides it."""
+    try:
+        import dask.array as da
+    except ModuleNotFoundError:
+        raise ModuleNotFoundError("a chunked (dask-backed) class-belief map needs dask: "
+                                  "pip install 'psgsl-pgm[dask]'") from None
+    return da
+
+
+def _cell_chunks(chunks, shape: tuple) -> tuple:
+    """dask chunks of the cell axes ``shape`` from ``chunks`` (an int for every axis, or one entry per axis)."""
+    da = _dask_array_module()
+    if isinstance(chunks, (bool, np.bool_)) or not isinstance(chunks, (int, np.integer, str, tuple)):
+        raise TypeError(f"chunks must be an int or a tuple with one entry per cell axis {shape}, got {chunks!r}")
+    if isinstance(chunks, tuple) and len(chunks) != len(shape):
+        raise ValueError(f"chunks must have one entry per cell axis {shape}, got {chunks!r}")
+    return da.core.normalize_chunks(chunks, shape, dtype=np.float64)
+
+
+def _distribution_block(block, name: str, block_info=None):
+    """One chunk checked as the numpy path's :func:`psgsl_pgm._validate.distribution` does, then float64."""
+    from ._validate import distribution
+
+    try:
+        arr = distribution(block, name)
+    except ValueError as exc:
+        raise _relocate(exc, _offset(block_info)) from None
+    return arr.astype(np.float64)
+
+
+def class_beliefs_dask(class_probs, name: str):
+    """Class beliefs (..., k) as :class:`psgsl_pgm.ClassBeliefMap` holds them, lazily: float64, the class axis in
+    one chunk, every chunk checked when computed (finite, non-negative, normalised; global cell indices)."""
+    _float_dtype(class_probs, name)
+    q = _class_chunks(class_probs, class_probs.shape[-1], name)
+    return q.map_blocks(_distribution_block, name, dtype=np.float64, meta=np.empty((0,) * q.ndim))
+
+
+def broadcast_cells_dask(row: np.ndarray, shape: tuple, chunks):
+    """``row`` (k,) in every cell of ``shape``: a lazy (*shape, k) dask array chunked over the cells."""
+    da = _dask_array_module()
+    cells = _cell_chunks(chunks, shape)
+    return da.broadcast_to(row, shape + row.shape, chunks=cells + (row.shape,))
+
+
+def _room_block(labels, table, prior, block_info=None):
+    """p(o | room_c) on one chunk of room labels, as the numpy path of ClassBeliefMap.from_rooms computes it."""
+    from ._beliefs import room_evidence, update_class_probs
+
+    try:
+        return update_class_probs(prior, room_evidence(labels, table, prior))
+    except ValueError as exc:
+        raise _relocate(exc, _offset(block_info)) from None
+
+
+def room_beliefs_dask(room_labels, room_table, class_prior: np.ndarray, *, layers: int | None, chunks):
+    """p(o | room_c) over a room-label map, lazily: (H, W, k), or (H, W, L, k) with ``layers``.
+
+    ``room_labels`` is a dask array (chunked over cells; ``chunks`` rechunks it) or, with ``chunks``, an array
+    that fits. The ontology side (``room_table`` against ``class_prior``) is checked at once; the labels per chunk.
+    """
+    from ._beliefs import room_evidence
+    from ._validate import as_float_array
+
+    da = _dask_array_module()
+    table = as_float_array(room_table, "room_class_table", dtype=np.float64, ndim=2)
+    room_evidence(np.array([-1]), table, class_prior)  # the table, the prior and their compatibility, now
+    labels = room_labels if is_dask_array(room_labels) else np.asarray(room_labels)
+    if labels.ndim != 2:
+        raise ValueError(f"room_labels must be an (H, W) map, got shape {labels.shape}")
+    if np.dtype(labels.dtype).kind not in "iuf":
+        raise TypeError(f"room_labels must be integer room indices (-1 = none), got an array of dtype {labels.dtype}")
+    shape = labels.shape + (() if layers is None else (layers,))
+    if chunks is not None:
+        cells = _cell_chunks(chunks, shape)
+    else:
+        cells = labels.chunks + (() if layers is None else ((layers,),))
+    labels = labels.rechunk(cells[:2]) if is_dask_array(labels) else da.from_array(labels, chunks=cells[:2])
+    k = table.shape[1]
+    probs = labels.map_blocks(_room_block, table, class_prior, new_axis=2, chunks=labels.chunks + ((k,),),
+                              dtype=np.float64, meta=np.empty((0, 0, 0)))
+    if layers is None:
+        return probs
+    return da.broadcast_to(probs[:, :, None, :], shape + (k,), chunks=cells + ((k,),))
+
+
+def read_cells_dask(x, cells: tuple) -> np.ndarray:
+    """The class rows (n, k) of some cells of a dask (..., k) array: computes only the chunks holding them."""
+    return np.asarray(x.vindex[tuple(np.asarray(i, dtype=np.intp) for i in cells)].compute(), dtype=np.float64)
+
+
+def _splice_block(block, edits, block_id=None):
+    edit = edits.get(block_id[:-1])
+    if edit is None:
+        return block
+    out = block.copy()
+    out[edit[0]] = edit[1]
+    return out
+
+
+def splice_cells_dask(x, cells: tuple, rows: np.ndarray):
+    """``x`` (..., k) with the class rows of ``cells`` (one index array per cell axis) replaced by ``rows``
+    (n, k), lazily: the chunks that hold none of them pass through unchanged."""
+    starts = [np.cumsum((0,) + c) for c in x.chunks[:-1]]
+    block = [np.searchsorted(s, i, side="right") - 1 for s, i in zip(starts, cells)]
+    local = [i - s[b] for i, s, b in zip(cells, starts, block)]
+    ids = np.ravel_multi_index(block, x.numblocks[:-1])
+    edits = {}
+    for b in np.unique(ids):
+        sel = ids == b
+        edits[tuple(int(i) for i in np.unravel_index(b, x.numblocks[:-1]))] = (tuple(i[sel] for i in local), rows[sel])
+    return x.map_blocks(_splice_block, edits, dtype=x.dtype, meta=np.empty((0,) * x.ndim, dtype=x.dtype))
+
+
+def fresh_handle(x):
+    """A new dask Array object on ``x``'s graph (item assignment on it leaves ``x`` as it is)."""
+    da = _dask_array_module()
+    return da.Array(x.dask, x.name, x.chunks, meta=x)
