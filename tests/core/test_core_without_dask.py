@@ -17,7 +17,7 @@ SCRIPT = textwrap.dedent(
 
     sys.meta_path.insert(0, Block())
     import numpy as np
-    from psgsl_pgm import fuse, semantic_information_gain, semantic_source_probability
+    from psgsl_pgm import ClassBeliefMap, fuse, semantic_information_gain, semantic_source_probability
     from psgsl_pgm._grid_runner import GridJob, run_grid
 
     q = np.array([[0.9, 0.05, 0.025, 0.025], [0.25, 0.25, 0.25, 0.25]])
@@ -28,6 +28,13 @@ SCRIPT = textwrap.dedent(
     try:
         run_grid([GridJob("unused.json", print)], write=None, scheduler="local")
     except ValueError as exc:
+        print(exc)
+    m = ClassBeliefMap.from_prior((1, 2), prior, tuple("abcd"))
+    m.update([[0, 0]], [lik])
+    print(m.source_probability(lik, prior).round(4).tolist())
+    try:
+        ClassBeliefMap.from_prior((1, 2), prior, tuple("abcd"), chunks=1)
+    except ModuleNotFoundError as exc:
         print(exc)
     assert not [m for m in sys.modules if m.split(".")[0] in ("dask", "distributed", "zarr")]
     """
@@ -40,3 +47,5 @@ def test_core_and_runner_import_and_run_without_dask(tmp_path):
     lines = proc.stdout.strip().splitlines()
     assert lines[0] == "[0.604, 0.396] [0.604, 0.396] (2,)"
     assert lines[1] == "scheduler='local' needs dask.distributed: pip install 'psgsl-pgm[dask]'"
+    assert lines[2] == "[[0.5575, 0.4425]]"  # w = 4 Σ lik² = 1.26 against 1
+    assert lines[3] == "a chunked (dask-backed) class-belief map needs dask: pip install 'psgsl-pgm[dask]'"
