@@ -529,9 +529,10 @@ def splice_cells_dask(x, cells: tuple, rows: np.ndarray):
     block = [np.searchsorted(s, i, side="right") - 1 for s, i in zip(starts, cells)]
     local = [i - s[b] for i, s, b in zip(cells, starts, block)]
     ids = np.ravel_multi_index(block, x.numblocks[:-1])
+    order = np.argsort(ids, kind="stable")
+    blocks, first = np.unique(ids[order], return_index=True)
     edits = {}
-    for b in np.unique(ids):
-        sel = ids == b
+    for b, sel in zip(blocks, np.split(order, first[1:])):  # the edits of each chunk that has some
         edits[tuple(int(i) for i in np.unravel_index(b, x.numblocks[:-1]))] = (tuple(i[sel] for i in local), rows[sel])
     return x.map_blocks(_splice_block, edits, dtype=x.dtype, meta=np.empty((0,) * x.ndim, dtype=x.dtype))
 
