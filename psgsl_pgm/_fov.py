@@ -317,7 +317,14 @@ class ViewCache:
         if not np.all(np.isfinite(gain)):
             raise ValueError("information_gain must be finite")
         single, cams = self._cameras(pose)
-        phi = np.array([gain[self.in_view(cam)].sum() for cam in cams])  # loop over poses (tens)
+        from ._view_kernel import cone_values  # compiled on first use (numba)
+
+        phi = np.empty(len(cams))
+        for i, cam in enumerate(cams):  # loop over poses (tens); the same cells in the same order as field_of_view
+            rows, cols = self.sight(cam.cell)
+            phi[i] = cone_values(rows, cols, gain, col0=cam.col0, row0=cam.row0, res=cam.res, heading=cam.heading,
+                                 half_angle=cam.half_angle, min_range=cam.min_range,
+                                 max_range=cam.max_range).sum()
         return float(phi[0]) if single else phi
 
 

@@ -9,7 +9,9 @@ boundary is closed up to rounding: both sides carry a few ulps of d of rounding 
 with a slack of 8 ε d (ε the float64 epsilon). A cell exactly on the boundary — the diagonal cell of a
 camera with α = π/4 looking along an axis — is inside, whatever the rounding of cos α and √2; a cell counts
 wrongly only if its bearing is within about 8 ε / sin α ≈ 2e-15 rad of the boundary. The cell holding the
-pose itself (d below 1e-12 cells) is always in the cone.
+pose itself (d below 1e-12 cells) is always in the cone. The distance is d = hypot(Δx, Δy); the kernel uses
+the faster √(Δx² + Δy²) (within an ulp of it) wherever that cannot change a decision, i.e. away from 1e-12 d
+of every boundary.
 
 Compiled by numba on first call and cached on disk (``cache=True``); imported lazily, so ``import psgsl_pgm``
 does not import numba.
@@ -22,22 +24,69 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["SLACK", "cone_mask"]
+__all__ = ["SLACK", "cone_mask", "cone_values"]
 
 SLACK = 8 * float(np.finfo(np.float64).eps)  # rounding slack of the bearing test, relative to the distance
 
 
+@nb.njit(nogil=True, cache=True, error_model="numpy", inline="always")
+def _exact(r, c, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range):
+    """The decision itself, with d = hypot(Δx, Δy)."""
+    dx = (c + 0.5 - col0) * res
+    dy = (r + 0.5 - row0) * res
+    d = math.hypot(dx, dy)
+    ok = (d >= min_range) & (d <= max_range)
+    if ok and not full and d >= 1e-12 * res:
+        ok = dx * cos_h + dy * sin_h + SLACK * d >= d * cos_half  # cos β ≥ cos α  ⇔  |β| ≤ α
+    return ok
+
+
 @nb.njit(nogil=True, cache=True, error_model="numpy")
-def _cone_mask(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, out):
+def _screen(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code):
+    """Branch-free (vectorisable) first pass: code = 1 inside, 0 outside, 2 too close to call (recompute).
+
+    Uses d = √(Δx² + Δy²), within an ulp of hypot where 1e-280 < d² < 1e280; a cell within 1e-12 d of a
+    boundary (range, the pose's own point, or the cone's edge), or outside that scale range, is left to
+    :func:`_exact`, so the decisions are exactly those of :func:`_exact`.
+    """
     tiny = 1e-12 * res
     for j in range(rows.shape[0]):
         dx = (cols[j] + 0.5 - col0) * res
         dy = (rows[j] + 0.5 - row0) * res
-        d = math.hypot(dx, dy)
-        ok = (d >= min_range) & (d <= max_range)
-        if ok and not full and d >= tiny:
-            ok = dx * cos_h + dy * sin_h + SLACK * d >= d * cos_half  # cos β ≥ cos α  ⇔  |β| ≤ α
-        out[j] = ok
+        d2 = dx * dx + dy * dy
+        d = math.sqrt(d2)
+        eps = 1e-12 * d
+        v = dx * cos_h + dy * sin_h + SLACK * d - d * cos_half
+        ok = (d >= min_range) & (d <= max_range) & (full | (d < tiny) | (v >= 0.0))
+        tie = ((abs(d - min_range) <= eps) | (abs(d - max_range) <= eps) | (abs(d - tiny) <= eps)
+               | (abs(v) <= eps) | ~((d2 > 1e-280) & (d2 < 1e280)))
+        code[j] = np.uint8(2) if tie else np.uint8(ok)
+
+
+@nb.njit(nogil=True, cache=True, error_model="numpy")
+def _cone_mask(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, out):
+    code = np.empty(rows.shape[0], np.uint8)
+    _screen(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code)
+    for j in range(rows.shape[0]):
+        if code[j] == 2:
+            out[j] = _exact(rows[j], cols[j], col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range)
+        else:
+            out[j] = code[j] == 1
+
+
+@nb.njit(nogil=True, cache=True, error_model="numpy")
+def _cone_values(rows, cols, values, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, out):
+    code = np.empty(rows.shape[0], np.uint8)
+    _screen(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code)
+    n = 0
+    for j in range(rows.shape[0]):
+        k = code[j]
+        if k == 2:
+            k = _exact(rows[j], cols[j], col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range)
+        if k:
+            out[n] = values[rows[j], cols[j]]
+            n += 1
+    return n
 
 
 def cone_mask(rows, cols, *, col0, row0, res, heading, half_angle, min_range, max_range):
@@ -60,9 +109,32 @@ def cone_mask(rows, cols, *, col0, row0, res, heading, half_angle, min_range, ma
     -------
     inside : (m,) ndarray of bool
     """
-    rows = np.ascontiguousarray(rows, dtype=np.int64)
-    cols = np.ascontiguousarray(cols, dtype=np.int64)
+    rows, cols = np.asarray(rows), np.asarray(cols)
     out = np.empty(rows.shape[0], dtype=np.bool_)
-    _cone_mask(rows, cols, float(col0), float(row0), float(res), math.cos(heading), math.sin(heading),
-               math.cos(half_angle), bool(half_angle >= math.pi), float(min_range), float(max_range), out)
+    _cone_mask(rows, cols, *_camera_args(col0, row0, res, heading, half_angle, min_range, max_range), out)
     return out
+
+
+def cone_values(rows, cols, values, *, col0, row0, res, heading, half_angle, min_range, max_range):
+    """``values[rows, cols]`` of the cells in the cone, in the order given (as :func:`cone_mask` selects).
+
+    Parameters
+    ----------
+    rows, cols : (m,) ndarray of int
+    values : (H, W) ndarray of float64
+    col0, row0, res, heading, half_angle, min_range, max_range
+        As for :func:`cone_mask`.
+
+    Returns
+    -------
+    selected : (s,) ndarray of float64
+    """
+    out = np.empty(rows.shape[0])
+    n = _cone_values(rows, cols, values, *_camera_args(col0, row0, res, heading, half_angle, min_range, max_range),
+                     out)
+    return out[:n]
+
+
+def _camera_args(col0, row0, res, heading, half_angle, min_range, max_range):
+    return (float(col0), float(row0), float(res), math.cos(heading), math.sin(heading), math.cos(half_angle),
+            bool(half_angle >= math.pi), float(min_range), float(max_range))
