@@ -206,7 +206,12 @@ def _belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part
                     m4 += t
                     m5 += t * d
             w[r] = acc
-            mom[r, 0] = v - acc * math.log(acc) if acc > 0 else v  # Jensen gap v − w log w ≥ 0
+            if paper:  # w log w is needed again by the paper's terms: computed (one log) once per cell
+                wlw = acc * math.log(acc) if acc > 0 else 0.0
+                mom[r, 9] = wlw
+                mom[r, 0] = v - wlw  # Jensen gap v − w log w ≥ 0
+            else:
+                mom[r, 0] = v - acc * math.log(acc) if acc > 0 else v  # Jensen gap v − w log w ≥ 0
             mom[r, 1] = m2
             mom[r, 2] = m3
             mom[r, 3] = m4
@@ -259,8 +264,11 @@ def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy
         wn = w[r]
         jensen = mom[r, 0]
         spread = max(rmax - wn, wn - rmin)
-        wlw = wn * math.log(wn) if wn > 0 else 0.0
-        alog = a * math.log(a) if a > 0 else 0.0
+        if paper:  # w log w from the moments pass; a log a only here
+            wlw = mom[r, 9]
+            alog = a * math.log(a) if a > 0 else 0.0
+        else:
+            wlw = alog = 0.0
         if a * spread <= radius:
             # (−a)^j μ_j, j = 2..5 (μ_1 = 0 exactly)
             na = -a
@@ -466,14 +474,14 @@ def belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper):
     Returns
     -------
     w : (n,) float64 ndarray
-    mom : (n, 5) or (n, 9) float64 ndarray
-        Columns [Jensen gap, μ_2 … μ_5] (+ [ν_1 … ν_4] when ``paper``).
+    mom : (n, 5) or (n, 10) float64 ndarray
+        Columns [Jensen gap, μ_2 … μ_5] (+ [ν_1 … ν_4, w log w] when ``paper``).
     stats : (5,) float64 ndarray
         As :func:`belief_weights`, with the last entry U = Σ_c f_c w_c instead of Σ_c w_c.
     """
     n = q.shape[0]
     w = np.empty(n)
-    mom = np.empty((n, 9 if paper else 5))
+    mom = np.empty((n, 10 if paper else 5))
     part = np.zeros((n_chunks(n), 5))
     run(_belief_moments, n, q.size * (3 if paper else 2), q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part)
     return w, mom, combine_stats(part)
