@@ -72,8 +72,7 @@ def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, reso
     occ = _occupancy(occupancy)
     cam = _camera(occ, pose, max_range=max_range, half_angle=half_angle, min_range=min_range,
                   resolution=resolution, origin=origin)
-    return visible_from(occ, cam.cell, reach=cam.reach, candidate=cam.in_cone,
-                        cone=(cam.heading, cam.half_angle, cam.offset))
+    return visible_from(occ, cam.cell, reach=cam.reach, camera=cam)
 
 
 class _Camera:
@@ -236,12 +235,8 @@ class ViewCache:
             return hit
         occ, opt = self.occupancy, self._opt
         reach = opt.reach(occ.shape)
-        limit = (opt.max_range / opt.res + 0.75) ** 2  # a pose is within √2/2 cell of its cell's centre
-
-        def within(rows, cols):
-            return (rows - key[0]) ** 2 + (cols - key[1]) ** 2 <= limit
-
-        rows, cols = np.nonzero(visible_from(occ, key, reach=reach, candidate=within))
+        disc = min(opt.max_range / opt.res, 2.0**62) + 0.75  # a pose is within √2/2 cell of its cell's centre
+        rows, cols = np.nonzero(visible_from(occ, key, reach=reach, disc=disc))
         hit = (rows.astype(np.int32), cols.astype(np.int32))
         for a in hit:
             a.flags.writeable = False

@@ -14,7 +14,7 @@ Two exact implementations of the same rule:
   passes exactly through a cell corner, both cells beside the corner are checked. Cost O(n · L) for n
   segments of L cells.
 * :func:`visible_from` — every cell seen from one cell centre, by shadow casting over the Chebyshev rings
-  around it: an occupied cell in ring j hides exactly the directions of its closed angular interval for
+  around it (compiled, :mod:`psgsl_pgm._sight_kernel`): an occupied cell in ring j hides exactly the directions of its closed angular interval for
   every target in a ring k > j (and at a ring's diagonal, the two ring cells beside the corner). Directions
   are compared through the angles of gcd-reduced integer vectors, so equal directions give equal floats and
   a corner touch is never missed. Cost O(A log B): A cells in the rings up to the one where the shadows close
@@ -146,86 +146,11 @@ class LineOfSightCache:
 
 
 # ---- shadow casting from one cell centre ------------------------------------------------------------------
-def _direction_angle(ix: np.ndarray, iy: np.ndarray) -> np.ndarray:
-    """arctan2 of integer direction vectors reduced by their gcd (equal directions -> bitwise-equal angles)."""
-    g = np.gcd(ix, iy)
-    g[g == 0] = 1
-    return np.arctan2((iy // g).astype(np.float64), (ix // g).astype(np.float64))
-
-
-def _ring(k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Offsets (dx, dy) of the cells at Chebyshev distance ``k`` (column offset dx, row offset dy)."""
-    if k == 0:
-        return np.zeros(1, np.int64), np.zeros(1, np.int64)
-    t = np.arange(-k, k + 1, dtype=np.int64)
-    inner = t[1:-1]
-    dx = np.concatenate([t, t, np.full(inner.size, -k), np.full(inner.size, k)])
-    dy = np.concatenate([np.full(t.size, k), np.full(t.size, -k), inner, inner])
-    return dx, dy
-
-
-def _shadow_intervals(dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Closed angular intervals [lo, hi] ⊂ [-π, π] of the squares of cells (dx, dy) ≠ (0, 0) seen from (0, 0).
-
-    An interval across the ±π cut is split in two. Endpoints are the angles of the extreme corners, computed
-    by :func:`_direction_angle` on doubled (integer) corner coordinates.
-    """
-    cx = 2 * dx[:, None] + np.array([-1, 1, -1, 1])[None, :]
-    cy = 2 * dy[:, None] + np.array([-1, -1, 1, 1])[None, :]
-    a = _direction_angle(cx, cy)  # (n, 4)
-    centre = np.arctan2(dy, dx).astype(np.float64)[:, None]
-    rel = np.angle(np.exp(1j * (a - centre)))  # within (-π/2, π/2): a square not containing the origin
-    rows = np.arange(len(dx))
-    lo, hi = a[rows, np.argmin(rel, axis=1)], a[rows, np.argmax(rel, axis=1)]
-    wrap = lo > hi
-    starts = np.concatenate([lo[~wrap], lo[wrap], np.full(int(wrap.sum()), -np.pi)])
-    ends = np.concatenate([hi[~wrap], np.full(int(wrap.sum()), np.pi), hi[wrap]])
-    return starts, ends
-
-
-def _merge(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Union of closed intervals as sorted disjoint closed intervals (touching intervals merge)."""
-    if starts.size == 0:
-        return starts, ends
-    order = np.argsort(starts, kind="stable")
-    s, e = starts[order], ends[order]
-    run = np.maximum.accumulate(e)
-    new = np.ones(s.size, dtype=bool)
-    new[1:] = s[1:] > run[:-1]
-    first = np.flatnonzero(new)
-    return s[first], np.maximum.reduceat(e, first)
-
-
-def _covered(theta: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """Whether each angle lies in the union of the (merged) closed intervals."""
-    if starts.size == 0:
-        return np.zeros(theta.shape, dtype=bool)
-    i = np.searchsorted(starts, theta, side="right") - 1
-    return (i >= 0) & (theta <= ends[np.maximum(i, 0)])
-
-
-def _arcs_covered(arcs, starts: np.ndarray, ends: np.ndarray) -> bool:
-    """Whether every arc [a, b] lies inside one merged interval."""
-    for a, b in arcs:  # one or two arcs
-        i = np.searchsorted(starts, a, side="right") - 1
-        if i < 0 or ends[i] < b:
-            return False
-    return True
-
-
-def _cone_arcs(heading: float, half_angle: float, pad: float):
-    """The directions of a cone as one or two arcs in [-π, π] (the whole circle if it is that wide)."""
-    half = half_angle + pad
-    if half >= np.pi:
-        return [(-np.pi, np.pi)]
-    lo = float(np.angle(np.exp(1j * (heading - half))))
-    hi = float(np.angle(np.exp(1j * (heading + half))))
-    return [(lo, hi)] if lo <= hi else [(lo, np.pi), (-np.pi, hi)]
-
-
-def visible_from(occupancy: np.ndarray, cell, *, reach: int, candidate, cone=None) -> np.ndarray:
+def visible_from(occupancy: np.ndarray, cell, *, reach: int, disc=None, camera=None) -> np.ndarray:
     """Cells whose centre is in line of sight of the centre of ``cell`` (the rule of :func:`cells_clear`,
-    except that the two end cells may be occupied), restricted to ``candidate`` cells.
+    except that the two end cells may be occupied), restricted to candidate cells.
+
+    The shadow cast of the module docstring, compiled (:mod:`psgsl_pgm._sight_kernel`).
 
     Parameters
     ----------
@@ -234,52 +159,20 @@ def visible_from(occupancy: np.ndarray, cell, *, reach: int, candidate, cone=Non
         (row, col) of the viewpoint.
     reach : int
         Largest Chebyshev distance (in cells) of a candidate from ``cell``.
-    candidate : callable
-        ``candidate(rows, cols) -> (n,) bool``: which cells of a ring may be seen (range, opening angle).
-    cone : (heading, half_angle, offset), optional
-        When given, the search stops once the shadows cover every direction from ``cell`` that a
-        candidate can still have: the cone around ``heading`` widened by ``arcsin(offset / k)`` at ring k,
-        ``offset`` being the distance (cells) of the true viewpoint from the cell centre.
+    disc : float, optional
+        Candidates: the cells whose centre is within ``disc`` cells of the viewpoint.
+    camera : psgsl_pgm._fov._Camera, optional
+        Candidates: the cells in the camera's range and opening angle (:mod:`psgsl_pgm._view_kernel`); the
+        cast stops once the shadows cover every direction from ``cell`` that such a cell can still have (the
+        cone around the heading widened by ``arcsin(offset / k)`` at ring k, ``offset`` being the distance of
+        the camera from the cell centre). Exactly one of ``disc`` and ``camera``.
 
     Returns
     -------
     visible : (H, W) ndarray of bool
     """
-    occ = occupancy
-    h, w = occ.shape
-    r0, c0 = int(cell[0]), int(cell[1])
-    visible = np.zeros((h, w), dtype=bool)
-    starts = ends = np.zeros(0)
-    for k in range(reach + 1):  # loop over rings (at most max(H, W)); each ring is vectorised
-        if k >= 2 and starts.size:
-            if cone is None:
-                arcs = [(-np.pi, np.pi)]
-            else:
-                heading, half_angle, offset = cone
-                arcs = _cone_arcs(heading, half_angle, float(np.arcsin(min(1.0, offset / k))) + 1e-9)
-            if _arcs_covered(arcs, starts, ends):
-                break
-        dx, dy = _ring(k)
-        rows, cols = r0 + dy, c0 + dx
-        inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
-        if not inside.any():  # this ring, and every further one, lies outside the grid
-            break
-        dx, dy, rows, cols = dx[inside], dy[inside], rows[inside], cols[inside]
-        cand = np.asarray(candidate(rows, cols), dtype=bool)
-        if cand.any():
-            tx, ty = dx[cand], dy[cand]
-            seen = ~_covered(_direction_angle(tx, ty), starts, ends)
-            if k >= 1:  # at a ring's diagonal the segment passes the corner of the two ring cells beside it
-                diag = (np.abs(tx) == k) & (np.abs(ty) == k)
-                if diag.any():
-                    tr, tc = rows[cand], cols[cand]
-                    sx, sy = np.sign(tx), np.sign(ty)
-                    side = occ[tr, np.clip(tc - sx, 0, w - 1)] | occ[np.clip(tr - sy, 0, h - 1), tc]
-                    seen &= ~(diag & side)
-            visible[rows[cand][seen], cols[cand][seen]] = True
-        if k >= 1:
-            blocker = occ[rows, cols]
-            if blocker.any():
-                s_new, e_new = _shadow_intervals(dx[blocker], dy[blocker])
-                starts, ends = _merge(np.concatenate([starts, s_new]), np.concatenate([ends, e_new]))
-    return visible
+    from ._sight_kernel import cast  # compiled on first use (numba)
+
+    if (disc is None) == (camera is None):
+        raise TypeError("visible_from needs exactly one of disc and camera")
+    return cast(occupancy, cell, reach=reach, disc=disc, camera=camera)
