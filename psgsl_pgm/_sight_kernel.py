@@ -39,30 +39,29 @@ def _angle(ix, iy):
 
 
 @nb.njit(**_JIT)
-def _covered(theta, starts, ends, m):
-    """Whether theta lies in one of the m sorted disjoint closed intervals."""
-    lo, hi = 0, m  # the last start ≤ theta, by bisection
+def _last_start(x, starts, m):
+    """Index of the last of the m sorted starts that is ≤ x (−1 if none), by bisection."""
+    lo, hi = 0, m
     while lo < hi:
         mid = (lo + hi) // 2
-        if starts[mid] <= theta:
+        if starts[mid] <= x:
             lo = mid + 1
         else:
             hi = mid
-    i = lo - 1
+    return lo - 1
+
+
+@nb.njit(**_JIT)
+def _covered(theta, starts, ends, m):
+    """Whether theta lies in one of the m sorted disjoint closed intervals."""
+    i = _last_start(theta, starts, m)
     return i >= 0 and theta <= ends[i]
 
 
 @nb.njit(**_JIT)
 def _arc_covered(a, b, starts, ends, m):
     """Whether the arc [a, b] lies inside one interval."""
-    lo, hi = 0, m
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if starts[mid] <= a:
-            lo = mid + 1
-        else:
-            hi = mid
-    i = lo - 1
+    i = _last_start(a, starts, m)
     return i >= 0 and ends[i] >= b
 
 
