@@ -25,7 +25,7 @@ from scipy.special import logsumexp
 from ._beliefs import update_class_probs
 from ._fusion import fuse
 from ._semantic import semantic_source_probability
-from ._validate import as_float_array, check_nonnegative, check_sums, identifier as check_identifier, index as as_index
+from ._validate import as_array, as_float_array, check_nonnegative, check_sums, identifier as check_identifier, index as as_index
 
 __all__ = ["MAX_CELLS", "SemanticGSLProblem"]
 
@@ -53,18 +53,18 @@ def _distribution(x: np.ndarray, name: str) -> np.ndarray:
     return x / x.sum(axis=-1, keepdims=True)
 
 
-def _names(names, count: int, prefix: str, what: str) -> tuple[str, ...]:
-    """Default or validated identifiers, one per item."""
+def _names(names, count: int, prefix: str, argument: str) -> tuple[str, ...]:
+    """Default or validated identifiers, one per item; messages name ``argument`` (and the entry)."""
     if names is None:
         width = len(str(count - 1))
         return tuple(f"{prefix}{i:0{width}d}" for i in range(count))
     if isinstance(names, (str, bytes, dict)) or not hasattr(names, "__iter__"):
-        raise TypeError(f"{what}s must be a sequence of {count} names, got {type(names).__name__} {names!r}")
-    names = tuple(check_identifier(name, what) for name in names)
+        raise TypeError(f"{argument} must be a sequence of {count} names, got {type(names).__name__} {names!r}")
+    names = tuple(check_identifier(name, f"{argument}[{i}]") for i, name in enumerate(names))
     if len(names) != count:
-        raise ValueError(f"expected {count} {what}s, got {len(names)}: {names}")
+        raise ValueError(f"{argument} must have {count} names, got {len(names)}: {names}")
     if len(set(names)) != count:
-        raise ValueError(f"{what}s must be unique, got {names}")
+        raise ValueError(f"{argument} must be unique, got {names}")
     return names
 
 
@@ -168,9 +168,9 @@ class SemanticGSLProblem:
             n = len(cell_names)
             if n < 1:
                 raise ValueError("cells must name at least one cell")
-        self.cell_names = _names(cell_names, n, "c", "cell name")
-        self.class_names = _names(class_names, k, "o", "class name")
-        self.gas_names = _names(gas_names, m, "gas", "gas name")
+        self.cell_names = _names(cell_names, n, "c", "cells")
+        self.class_names = _names(class_names, k, "o", "class_names")
+        self.gas_names = _names(gas_names, m, "gas", "gas_names")
         if shape is not None:
             if isinstance(shape, (str, bytes)) or np.ndim(shape) != 1:
                 raise TypeError(f"shape must be a tuple of ints, got {type(shape).__name__} {shape!r}")
@@ -179,7 +179,7 @@ class SemanticGSLProblem:
                 raise ValueError(f"shape {shape} must have positive sides whose product is n = {n}")
         self.shape = shape
 
-        cells_idx = np.asarray(observation_cells)
+        cells_idx = as_array(observation_cells, "observation_cells", "a 1-D integer array")
         if cells_idx.size == 0:
             cells_idx = np.zeros(0, dtype=np.intp)
         if cells_idx.ndim != 1 or not np.issubdtype(cells_idx.dtype, np.integer):
@@ -189,6 +189,12 @@ class SemanticGSLProblem:
         obs = np.zeros((0, k)) if observation_likelihoods is None else _array(
             observation_likelihoods, "observation_likelihoods", 2
         )
+        if obs.shape[0] != cells_idx.size:
+            given = "" if observation_likelihoods is not None else " (observation_likelihoods not given)"
+            raise ValueError(
+                f"observation_cells and observation_likelihoods must have one entry per observation, got "
+                f"{cells_idx.size} observation cell(s) and {obs.shape[0]} likelihood row(s){given}"
+            )
         if obs.shape != (cells_idx.size, k):
             raise ValueError(
                 f"observation_likelihoods must have shape ({cells_idx.size}, {k}) (one row per observation "

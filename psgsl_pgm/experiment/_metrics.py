@@ -48,12 +48,20 @@ def error_and_spread(posteriors, centres, truth):
     check_sums(p.reshape(p.shape[:-2] + (-1,)).sum(axis=-1), "posteriors (each over the (H, W) cells)", p.dtype)
     truth = real_pair(truth, "truth", "an (x, y)", "metres")
     flat = p.reshape(p.shape[:-2] + (-1,))
+
+    def moments(xy, truth):
+        mean = flat @ xy  # E[s]
+        second = flat @ np.einsum("ij,ij->i", xy, xy)  # E‖s‖²
+        var = np.maximum(second - np.einsum("...i,...i->...", mean, mean), 0.0)  # trace Cov(s) = E‖s‖² − ‖E[s]‖²
+        error = np.linalg.norm(mean - truth, axis=-1)
+        return error, np.sqrt(var)
+
     xy = c.reshape(-1, 2)
-    mean = flat @ xy  # E[s]
-    second = flat @ np.einsum("ij,ij->i", xy, xy)  # E‖s‖²
-    var = np.maximum(second - np.einsum("...i,...i->...", mean, mean), 0.0)  # trace Cov(s) = E‖s‖² − ‖E[s]‖²
-    error = np.linalg.norm(mean - truth, axis=-1)
-    return error, np.sqrt(var)
+    error, spread = _scale_free(moments, (xy, truth), lambda: max(np.abs(xy).max(), np.abs(truth).max()))
+    if not (np.isfinite(error).all() and np.isfinite(spread).all()):
+        raise ValueError(f"centres and truth: the error or the spread exceeds the float64 range (coordinates up to "
+                         f"{max(np.abs(c).max(), np.abs(truth).max()):.3g} m)")
+    return error, spread
 
 
 def mean_ci(values, *, level: float = 0.95, lower: float | None = None) -> dict:
@@ -81,15 +89,43 @@ def mean_ci(values, *, level: float = 0.95, lower: float | None = None) -> dict:
         raise ValueError(f"values must hold at least one run of finite numbers on axis 0, got {describe(v)}")
     level = unit_interval(level, "level", low_open=True, high_open=True)
     lower = None if lower is None else real_number(lower, "lower")
-    m = v.mean(axis=0)
     n = v.shape[0]
     if n < 2:
-        half = np.full_like(m, np.nan)
+        m = v.mean(axis=0)
+        lo = hi = np.full_like(m, np.nan)
     else:
-        half = stats.t.ppf(0.5 + level / 2, n - 1) * v.std(axis=0, ddof=1) / np.sqrt(n)
-    lo, hi = m - half, m + half
+        t = stats.t.ppf(0.5 + level / 2, n - 1)
+
+        def interval(v):
+            m = v.mean(axis=0)
+            half = t * v.std(axis=0, ddof=1) / np.sqrt(n)
+            return m, m - half, m + half
+
+        m, lo, hi = _scale_free(interval, (v,), lambda: np.abs(v).max(axis=0))  # per column: columns are apart
+        if not (np.isfinite(m).all() and np.isfinite(lo).all() and np.isfinite(hi).all()):
+            raise ValueError(f"values: the mean or its confidence interval exceeds the float64 range (values up to "
+                             f"{np.abs(v).max():.3g})")
     if lower is not None:
         lo = np.where(np.isnan(lo), lo, np.maximum(lo, float(lower)))
     if np.ndim(m) == 0:
         return {"mean": float(m), "ci95": [float(lo), float(hi)]}
     return {"mean": m.tolist(), "ci95": [lo.tolist(), hi.tolist()]}
+
+
+def _scale_free(compute, arrays, scale):
+    """``compute(*arrays)`` for outputs of degree 1 in the arrays (means, distances, spreads), safe from overflow.
+
+    Ordinary inputs take the direct path, the same arithmetic bit for bit. Where an intermediate square or sum
+    overflows (numbers near 1e154 and beyond) those outputs are recomputed on the arrays divided by ``scale()``
+    (their magnitude, broadcasting against the arrays and the outputs) and multiplied back, the others kept as
+    they are; what is still not finite then lies beyond float64, and the caller refuses it.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = compute(*arrays)
+        if all(np.isfinite(o).all() for o in out):
+            return out
+        s = scale()
+        s = np.where(s > 0, s, 1.0)
+        again = compute(*(a / s for a in arrays))
+        ok = np.logical_and.reduce([np.isfinite(o) for o in out])
+        return tuple(np.where(ok, o, r * s)[()] for o, r in zip(out, again))

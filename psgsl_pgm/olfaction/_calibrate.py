@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .._validate import as_array, as_float_array, unit_interval
+from .._validate import as_array, as_float_array, describe, unit_interval
 from ._plume import PlumeModel
 
 __all__ = ["encounter_scale_mle", "fit_encounter_scale"]
@@ -48,18 +48,11 @@ def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit
     """
     if not isinstance(model, PlumeModel):
         raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
-    pos = np.asarray(positions, dtype=np.float64)
-    if pos.ndim != 2 or pos.shape[1] != 2:
-        raise ValueError(f"positions must have shape (n, 2) (x, y in metres), got {pos.shape}")
-    g = as_array(hits, "hits", "booleans (or 0/1)")
-    if g.dtype != bool and not (np.issubdtype(g.dtype, np.integer) and np.isin(g, (0, 1)).all()):
-        raise TypeError(f"hits must be booleans (or 0/1), got dtype {g.dtype}")
-    g = g.astype(bool)
-    if g.shape != (len(pos),):
-        raise ValueError(f"hits must have shape ({len(pos)},) like positions, got {g.shape}")
-    eps = float(false_hit_rate)
-    if not 0 <= eps < 1:
-        raise ValueError(f"false_hit_rate must lie in [0, 1), got {false_hit_rate!r}")
+    pos = as_float_array(positions, "positions", dtype=np.float64, ndim=2)
+    if pos.shape[1] != 2 or not np.isfinite(pos).all():
+        raise ValueError(f"positions must be (n, 2) finite positions (x, y in metres), got {describe(pos)}")
+    g = _hits(hits, (len(pos),), "positions")
+    eps = unit_interval(false_hit_rate, "false_hit_rate", high_open=True)
     field = model.concentration(source)
     cells = np.array([model.cell_of(p, "positions[i]") for p in pos], dtype=np.int64).reshape(-1, 2)
     return encounter_scale_mle(field[cells[:, 0], cells[:, 1]], g, false_hit_rate=eps)
@@ -89,19 +82,14 @@ def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> floa
     c = as_float_array(predicted, "predicted", dtype=np.float64)
     if c.ndim != 1 or not np.isfinite(c).all() or (c < 0).any():
         raise ValueError(f"predicted must be a (n,) array of finite non-negative values, got shape {c.shape}")
-    g = as_array(hits, "hits", "booleans (or 0/1)")
-    if g.dtype != bool and not (np.issubdtype(g.dtype, np.integer) and np.isin(g, (0, 1)).all()):
-        raise TypeError(f"hits must be booleans (or 0/1), got dtype {g.dtype}")
-    g = g.astype(bool)
-    if g.shape != c.shape:
-        raise ValueError(f"hits must have shape {c.shape} like predicted, got {g.shape}")
+    g = _hits(hits, c.shape, "predicted")
     eps = unit_interval(false_hit_rate, "false_hit_rate", high_open=True)
     c_hit, c_miss = c[g & (c > 0)], c[~g]
     if c_hit.size == 0:
-        raise ValueError("hits: no hit where the model predicts gas from this source (predicted > 0): the maximum-likelihood κ is 0")
+        raise ValueError("hits: no hit where the model predicts gas from this source (predicted > 0): the maximum-likelihood encounter scale is 0")
     miss_sum = float(c_miss.sum())
     if not miss_sum > 0:
-        raise ValueError("hits: no miss where the model predicts gas from this source (predicted > 0): the maximum-likelihood κ is ∞")
+        raise ValueError("hits: no miss where the model predicts gas from this source (predicted > 0): the maximum-likelihood encounter scale is ∞")
 
     def score(log_kappa: float) -> float:
         kappa = np.exp(log_kappa)
@@ -113,9 +101,23 @@ def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> floa
     while score(lo) <= 0:
         lo -= 10.0
         if lo < -700:
-            raise ValueError("predicted, hits and false_hit_rate: the maximum-likelihood κ is 0: false hits alone explain the hits")
+            raise ValueError("predicted, hits and false_hit_rate: false hits alone explain the hits (the maximum-likelihood "
+                             "encounter scale is 0)")
     while score(hi) >= 0:
         hi += 10.0
         if hi > 700:
-            raise ValueError("could not bracket the maximum-likelihood κ from above")
+            raise ValueError(f"predicted: the values where gas was hit (at most {c_hit.max():.3g}) are too small for "
+                             f"any encounter scale up to {np.exp(hi - 10.0):.3g} to explain the hits; give predicted "
+                             "in larger units")
     return float(np.exp(brentq(score, lo, hi, xtol=1e-13, rtol=1e-13)))
+
+
+def _hits(hits, shape: tuple, like: str) -> np.ndarray:
+    """Readings as a bool array of ``shape`` (booleans, or integers 0/1), shaped like argument ``like``."""
+    g = as_array(hits, "hits", "booleans (or 0/1)")
+    if g.dtype != bool and not (np.issubdtype(g.dtype, np.integer) and np.isin(g, (0, 1)).all()):
+        raise TypeError(f"hits must be booleans (or 0/1), got dtype {g.dtype}")
+    g = g.astype(bool)
+    if g.shape != shape:
+        raise ValueError(f"hits must have shape {shape} like {like}, got {g.shape}")
+    return g

@@ -101,6 +101,9 @@ def test_information_gain_and_fov_reject():
         field_of_view(occ, (1, 1), max_range=2, half_angle=1)
     with pytest.raises(TypeError, match="occupancy must be boolean"):
         field_of_view(np.full((4, 4), 0.5), (1, 1, 0), max_range=2, half_angle=1)
+    with pytest.raises(ValueError, match=r"outside the map \(extent 2e-323 × 2e-323"):  # no overflow warning either
+        field_of_view(occ, (1, 1, 0), max_range=2, half_angle=1, resolution=5e-324)
+    assert field_of_view(occ, (0, 0, 0), max_range=2, half_angle=np.pi, resolution=5e-324).all()  # 2 m: every cell
 
 
 def test_tiny_probabilities_do_not_underflow():

@@ -36,6 +36,29 @@ def test_mean_ci_is_the_student_t_interval():
     assert one["mean"] == 1.0 and all(np.isnan(one["ci95"]))
 
 
+def test_metrics_of_huge_coordinates_are_the_scaled_metrics_or_refused():
+    """Squares of numbers near 1e154 overflow float64; the results do not, so they are computed (no warning)."""
+    rng = np.random.default_rng(4)
+    p = rng.dirichlet(np.ones(12), size=2).reshape(2, 3, 4)
+    centres = np.stack(np.meshgrid(np.arange(4) + 0.5, np.arange(3) + 0.5, indexing="xy"), axis=-1)
+    err, spread = error_and_spread(p, centres, (1.0, 2.0))
+    for scale in (1e154, 1e300):
+        big_err, big_spread = error_and_spread(p, centres * scale, (scale, 2.0 * scale))
+        np.testing.assert_allclose(big_err, err * scale, rtol=1e-12)
+        np.testing.assert_allclose(big_spread, spread * scale, rtol=1e-9)
+    with pytest.raises(ValueError, match="centres and truth: the error or the spread exceeds the float64 range"):
+        error_and_spread(p, centres * 5e307, (-1.7e308, 0.0))
+
+    x = np.array([[1.0, 0.0], [3.0, 2e154], [2.0, 2e154]])
+    r, small = mean_ci(x), mean_ci(x[:, 0])
+    assert r["mean"][0] == small["mean"] and [b[0] for b in r["ci95"]] == small["ci95"]  # columns stay apart
+    np.testing.assert_allclose([r["mean"][1]] + [b[1] for b in r["ci95"]],
+                               np.array([mean_ci([0.0, 2.0, 2.0])["mean"]] + mean_ci([0.0, 2.0, 2.0])["ci95"]) * 1e154,
+                               rtol=1e-12)
+    with pytest.raises(ValueError, match="values: the mean or its confidence interval exceeds the float64 range"):
+        mean_ci([-1.7e308, 1.7e308, 1.7e308])
+
+
 def _fake_run(seed, n, rng):
     t = np.linspace(0, 600, n + 1)
     err = rng.uniform(0, 5, size=(n + 1, 3))

@@ -15,6 +15,7 @@ from psgsl_pgm.olfaction import (
     OlfactoryEstimator,
     PlumeModel,
     PMFSEstimator,
+    encounter_scale_mle,
     fit_encounter_scale,
 )
 
@@ -283,6 +284,16 @@ def test_fit_encounter_scale_recovers_kappa_from_model_draws():
         fit_encounter_scale(model, pos[:5], np.zeros(5, bool), src)
     with pytest.raises(ValueError, match="no miss where the model predicts gas"):
         fit_encounter_scale(model, pos[:5], np.ones(5, bool), src)
+    with pytest.raises(TypeError, match="false_hit_rate must be a number"):
+        fit_encounter_scale(model, pos[:5], hits[:5], src, false_hit_rate="0.01")
+    with pytest.raises(TypeError, match="positions must be a real numeric array"):
+        fit_encounter_scale(model, [[1.0, 1.0], [2.0]], hits[:2], src)
+
+
+def test_encounter_scale_mle_names_predicted_when_no_scale_fits():
+    """Predictions so small that no float64 encounter scale turns them into hits: the message names predicted."""
+    with pytest.raises(ValueError, match=r"predicted: the values where gas was hit \(at most 2.23e-309\) are too small"):
+        encounter_scale_mle(np.full(4, 2.2250738585e-309), [False, True, True, False], false_hit_rate=0.01)
 
 
 # --- bad input -------------------------------------------------------------------------------------------------------
