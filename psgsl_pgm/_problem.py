@@ -172,11 +172,13 @@ class SemanticGSLProblem:
         self.class_names = _names(class_names, k, "o", "class_names")
         self.gas_names = _names(gas_names, m, "gas", "gas_names")
         if shape is not None:
-            if isinstance(shape, (str, bytes)) or np.ndim(shape) != 1:
+            entries = shape.tolist() if isinstance(shape, np.ndarray) and shape.ndim == 1 else shape
+            if not isinstance(entries, (tuple, list)) or not all(np.ndim(s) == 0 for s in entries):
                 raise TypeError(f"shape must be a tuple of ints, got {type(shape).__name__} {shape!r}")
-            shape = tuple(as_index(s, "shape entries", minimum=1) for s in shape)
+            shape = tuple(as_index(s, "shape entries", minimum=1) for s in entries)
             if math.prod(shape) != n:  # exact, no int64 overflow
-                raise ValueError(f"shape {shape} must have positive sides whose product is n = {n}")
+                raise ValueError(f"shape {shape} must have positive sides whose product is the number of cells "
+                                 f"(cells gives n = {n})")
         self.shape = shape
 
         cells_idx = as_array(observation_cells, "observation_cells", "a 1-D integer array")
@@ -185,7 +187,7 @@ class SemanticGSLProblem:
         if cells_idx.ndim != 1 or not np.issubdtype(cells_idx.dtype, np.integer):
             raise TypeError(f"observation_cells must be a 1-D integer array, got {cells_idx.dtype} {cells_idx.shape}")
         if np.any((cells_idx < 0) | (cells_idx >= n)):
-            raise ValueError(f"observation_cells must index the {n} cells, got values outside [0, {n})")
+            raise ValueError(f"observation_cells must index the {n} cells (cells gives n = {n}), got values outside [0, {n})")
         obs = np.zeros((0, k)) if observation_likelihoods is None else _array(
             observation_likelihoods, "observation_likelihoods", 2
         )
@@ -213,11 +215,11 @@ class SemanticGSLProblem:
 
         g = np.ones(n) if olfactory_likelihood is None else _array(olfactory_likelihood, "olfactory_likelihood", 1)
         if g.shape != (n,):
-            raise ValueError(f"olfactory_likelihood must have shape ({n},), got {g.shape}")
+            raise ValueError(f"olfactory_likelihood must have shape ({n},), one entry per cell (cells gives n = {n}), got {g.shape}")
         self.olfactory_likelihood = g  # p(g | S = c), (n,)
         prior = np.full(n, 1.0 / n) if source_prior is None else _array(source_prior, "source_prior", 1, keep_float32=True)
         if prior.shape != (n,):
-            raise ValueError(f"source_prior must have shape ({n},), got {prior.shape}")
+            raise ValueError(f"source_prior must have shape ({n},), one entry per cell (cells gives n = {n}), got {prior.shape}")
         self.source_prior = _distribution(prior, "source_prior")  # π_s, (n,)
         gp = np.full(m, 1.0 / m) if gas_prior is None else _array(gas_prior, "gas_prior", 1, keep_float32=True)
         if gp.shape != (m,):

@@ -58,7 +58,9 @@ LIK, BG = [0.6, 0.3, 0.1], [0.2, 0.3, 0.5]
         (dict(olfactory_likelihood=[1.0, 1.0]), ValueError, r"shape \(3,\)"),
         (dict(olfactory_likelihood=[0.0, 0.0, 0.0]), ValueError, "probability zero"),
         (dict(source_prior=[0.5, 0.5, 0.5]), ValueError, "sum to 1"),
-        (dict(shape=(2, 2)), ValueError, "product is n"),
+        (dict(shape=[(1, 3)]), TypeError, "shape must be a tuple of ints"),
+        (dict(shape=[(1, 3), 1]), TypeError, "shape must be a tuple of ints"),
+        (dict(shape=(2, 2)), ValueError, r"product is the number of cells \(cells gives n = 3\)"),
         (dict(gas_observations=[[0.5, 0.5]]), ValueError, r"\(N_zeta, 1\)"),
     ],
 )
