@@ -413,36 +413,6 @@ def identifier(name: object, what: str) -> str:
     return name
 
 
-def source_node(cell: str) -> str:
-    """Network B's binary source variable S_i of cell ``cell``."""
-    return f"S_{cell}"
-
-
-def object_node(cell: str) -> str:
-    """The object-class variable O_c of cell ``cell``."""
-    return f"O_{cell}"
-
-
-def observation_node(cell: str, j: int) -> str:
-    """The j-th semantic observation Z of cell ``cell`` (child of O_c)."""
-    return f"Z_{cell}_{j}"
-
-
-def olfactory_node(cell: str) -> str:
-    """Network B's per-cell olfactory evidence G_i (child of S_i)."""
-    return f"G_{cell}"
-
-
-def counter_node(cell: str) -> str:
-    """The chain encoding's counter C_i after cell ``cell``."""
-    return f"C_{cell}"
-
-
-def zeta_node(j: int) -> str:
-    """The j-th gas-classifier observation ζ (child of γ)."""
-    return f"zeta_{j}"
-
-
 def cell_distribution(x, name: str, cell_shape: tuple) -> np.ndarray:
     """Validate a distribution over cells (non-negative, finite, sums to 1) of shape ``cell_shape``."""
     arr = as_float_array(x, name)
