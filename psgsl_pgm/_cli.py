@@ -18,6 +18,8 @@ import sys
 from pathlib import Path
 
 from . import _cli_export
+from ._cli_grid import (MAX_SEEDS, MAX_WORKERS, add_scheduler_argument, interrupted, positive_int, seed_count,
+                        worker_count)
 
 __all__ = ["build_parser", "error_line", "main"]
 
@@ -44,7 +46,6 @@ def _kitchen(args) -> int:
 
 
 def _demo(args) -> int:
-    from ._cli_grid import interrupted
     from ._grid_runner import GridInterrupted
     from ._output import prepare_output_dir
     from .experiment import DEMO_SEEDS, format_table, run_demo
@@ -79,7 +80,6 @@ def _demo(args) -> int:
 
 
 def _experiment(args) -> int:
-    from ._cli_grid import interrupted
     from ._grid_runner import GridInterrupted
     from ._output import prepare_output_dir
     from .experiment import ExperimentConfig, check_sources, format_table, parse_source, run_experiment
@@ -200,34 +200,8 @@ def _read_beliefs(args, ontology):
     return read_class_beliefs(args.class_probs, ontology.classes, grid=grid, class_prior=ontology.class_prior)
 
 
-#: Size guards of the command line: more seeds than this is years of runs, more workers than this no machine has.
-MAX_SEEDS = 10_000
-MAX_WORKERS = 1024
-
-
-def _positive_int(text, maximum=None):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    if maximum is not None and value > maximum:
-        raise argparse.ArgumentTypeError(f"expected a positive integer of at most {maximum}, got {text!r}")
-    return value
-
-
-def _seeds(text):
-    return _positive_int(text, MAX_SEEDS)
-
-
-def _workers(text):
-    return _positive_int(text, MAX_WORKERS)
-
-
 def build_parser() -> argparse.ArgumentParser:
     from . import _cli_search, _cli_world
-    from ._cli_grid import add_scheduler_argument
     from .experiment import ESTIMATORS
 
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
@@ -237,8 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo = sub.add_parser("demo", help="the validation experiment in small (≈ 15 s on 2 cores)")
     demo.add_argument("--out", default="psgsl-demo", help="output directory (default: %(default)s)")
-    demo.add_argument("--seeds", type=_seeds, default=None, help=f"number of seeds, at most {MAX_SEEDS} (default: 4)")
-    demo.add_argument("--workers", type=_workers, default=workers,
+    demo.add_argument("--seeds", type=seed_count, default=None, help=f"number of seeds, at most {MAX_SEEDS} (default: 4)")
+    demo.add_argument("--workers", type=worker_count, default=workers,
                       help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
     demo.add_argument("--no-search", action="store_true", help="skip the closed-loop comparison")
@@ -250,14 +224,14 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--sources", nargs="+", default=None,
                      help="object class names, 'x,y' positions or the world file's source names (default: the "
                      "world's sources; for the embedded house oven bed 5.0,6.0)")
-    exp.add_argument("--seeds", type=_seeds, default=10, help=f"seeds 0..N-1, N at most {MAX_SEEDS} (default: %(default)s)")
+    exp.add_argument("--seeds", type=seed_count, default=10, help=f"seeds 0..N-1, N at most {MAX_SEEDS} (default: %(default)s)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
-    exp.add_argument("--workers", type=_workers, default=workers,
+    exp.add_argument("--workers", type=worker_count, default=workers,
                      help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)
-    exp.add_argument("--stops", type=_positive_int, default=None,
+    exp.add_argument("--stops", type=positive_int, default=None,
                      help="follow only the first N stops of the tour (quick checks; default: the whole tour)")
     exp.add_argument("--quiet", action="store_true", help="no progress bar")
     exp.set_defaults(func=_experiment)

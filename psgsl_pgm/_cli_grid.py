@@ -1,4 +1,5 @@
-"""Command-line side of the grid runner (:mod:`psgsl_pgm._grid_runner`): ``--scheduler`` and the Ctrl-C line.
+"""Command-line side of the grid runner (:mod:`psgsl_pgm._grid_runner`): ``--scheduler``, the Ctrl-C line, and the
+argument types of counts and budgets (``--seeds``, ``--workers``, ... with their size guards).
 
 Used by ``psgsl experiment`` and ``psgsl search``::
 
@@ -11,13 +12,53 @@ Used by ``psgsl experiment`` and ``psgsl search``::
 
 from __future__ import annotations
 
+import argparse
 import shlex
 import sys
 
-__all__ = ["EXIT_INTERRUPTED", "add_scheduler_argument", "interrupted"]
+__all__ = ["EXIT_INTERRUPTED", "MAX_SEEDS", "MAX_WORKERS", "add_scheduler_argument", "interrupted", "positive_float",
+           "positive_int", "seed_count", "worker_count"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
+
+#: Size guards of the command line: more seeds than this is years of runs, more workers than this no machine has.
+MAX_SEEDS = 10_000
+MAX_WORKERS = 1024
+
+
+def positive_int(text, maximum=None):
+    """argparse type: an integer >= 1 (and <= ``maximum``)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    if maximum is not None and value > maximum:
+        raise argparse.ArgumentTypeError(f"expected a positive integer of at most {maximum}, got {text!r}")
+    return value
+
+
+def positive_float(text):
+    """argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def seed_count(text):
+    """argparse type of ``--seeds``: 1 to :data:`MAX_SEEDS`."""
+    return positive_int(text, MAX_SEEDS)
+
+
+def worker_count(text):
+    """argparse type of ``--workers``: 1 to :data:`MAX_WORKERS`."""
+    return positive_int(text, MAX_WORKERS)
 
 
 def add_scheduler_argument(parser) -> None:

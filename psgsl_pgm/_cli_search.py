@@ -6,39 +6,17 @@ import json
 import os
 from pathlib import Path
 
+from ._cli_grid import (MAX_SEEDS, MAX_WORKERS, add_scheduler_argument, interrupted, positive_float, positive_int,
+                        seed_count, worker_count)
+
 __all__ = ["add_parser", "run"]
 
 _SETTINGS = ((1.0, 1.0), (2.0, 2.0), (3.0, 1.0))
 _DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
-def _positive_int(text):
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
-
-
-def _positive_float(text):
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
 def add_parser(subparsers):
     """Register ``psgsl search``."""
-    from ._cli_grid import add_scheduler_argument
     from .experiment import ESTIMATORS, VARIANTS
     from .search import OPEN_SPACE_POLICIES, POLICIES
 
@@ -56,10 +34,12 @@ def add_parser(subparsers):
                    help="information variants (default: %(default)s)")
     p.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis"],
                    help="olfactory estimators (default: %(default)s)")
-    p.add_argument("--seeds", type=_positive_int, default=10, help="seeds 0..N-1 (default: %(default)s)")
-    p.add_argument("--budget", type=_positive_float, default=1000.0,
+    p.add_argument("--seeds", type=seed_count, default=10,
+                   help=f"seeds 0..N-1, N at most {MAX_SEEDS} (default: %(default)s)")
+    p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
-    p.add_argument("--workers", type=_positive_int, default=workers, help="worker processes (default: %(default)s)")
+    p.add_argument("--workers", type=worker_count, default=workers,
+                   help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -68,9 +48,9 @@ def add_parser(subparsers):
                    help="run the open-space benchmark instead (writes OUT/open_space.json)")
     p.add_argument("--open-policies", nargs="+", choices=OPEN_SPACE_POLICIES,
                    default=["infotaxis", "space-aware-infotaxis"], help="open-space policies (default: %(default)s)")
-    p.add_argument("--episodes", type=_positive_int, default=1000,
+    p.add_argument("--episodes", type=positive_int, default=1000,
                    help="open-space episodes per policy and setting (default: %(default)s)")
-    p.add_argument("--setting", nargs=2, type=_positive_float, action="append", metavar=("LAMBDA_OVER_DX", "R_DT"),
+    p.add_argument("--setting", nargs=2, type=positive_float, action="append", metavar=("LAMBDA_OVER_DX", "R_DT"),
                    help="open-space setting (repeatable; default: (1, 1), (2, 2), (3, 1))")
     p.set_defaults(func=run)
     return p
@@ -130,7 +110,6 @@ def run(args) -> int:
 def _run(args) -> int:
     if args.open_space:
         return _open_space(args)
-    from ._cli_grid import interrupted
     from ._grid_runner import GridInterrupted
     from .experiment import ExperimentConfig, parse_source
     from .search import SearchConfig

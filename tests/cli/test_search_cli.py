@@ -52,10 +52,14 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv):
     assert len(err) == 1 and err[0].startswith("psgsl search: error:")
 
 
-def test_bad_option_values_are_refused(capsys):
+@pytest.mark.parametrize("option", [["--budget", "-1"], ["--seeds", "10001"], ["--workers", "1025"],
+                                    ["--episodes", "0"]])
+def test_bad_option_values_are_refused(capsys, option):
+    """Counts and budgets are checked as psgsl experiment checks them, with the same size guards."""
     with pytest.raises(SystemExit) as exc:
-        main(["search", "--budget", "-1"])
+        main(["search"] + option)
     assert exc.value.code == 2
+    assert f"argument {option[0]}: expected a positive" in capsys.readouterr().err
 
 
 def test_table_of_a_single_run_has_no_interval(tmp_path):
