@@ -18,10 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..sim import default_world
-from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ._config import VARIANTS, ExperimentConfig
 from ._metrics import error_and_spread
-from ._step import VariantPosteriors, semantic_terms, visit
+from ._step import VariantPosteriors, semantic_terms, start_run, visit
 from ._tour import Tour, exploration_tour
 
 __all__ = ["RunResult", "run_config", "run_search", "semantic_terms", "walk"]
@@ -110,17 +109,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     -------
     RunResult
     """
-    config = ExperimentConfig() if config is None else config
-    if not isinstance(config, ExperimentConfig):
-        raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")
-    if estimator not in ESTIMATORS:
-        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise TypeError(f"seed must be an integer, got {seed!r}")
-    spec = parse_source(source)
-    setting = default_world() if world_spec is None else world_spec
-    if world is None:
-        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
+    config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
     house = world.house
     tour = exploration_tour(house, start=setting.start_for(house)) if tour is None else tour
     if config.stops is not None and config.stops < len(tour):

@@ -9,7 +9,8 @@ posterior of each information variant of :data:`VARIANTS`:
     semantics+rooms  p(s | g, z)     ∝ p(s | g) · p(s | z)        (class beliefs from p(o | room))
 
 :func:`visit` is the robot's physics at one stop: drive (the gas keeps evolving), one gas reading, one wind
-reading, and the camera frames at the requested headings (turning between them).
+reading, and the camera frames at the requested headings (turning between them). :func:`start_run` checks a
+run's settings and makes its world, the same way for both.
 """
 
 from __future__ import annotations
@@ -22,9 +23,49 @@ from .._fusion import fuse
 from .._semantic import semantic_source_probability
 from ..olfaction import GridInfotaxis, PlumeModel, PMFSEstimator
 from ..sim import default_world, match_names, reindex
-from ._config import ESTIMATORS, VARIANTS, ExperimentConfig
+from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 
-__all__ = ["VariantPosteriors", "make_estimator", "semantic_terms", "visit"]
+__all__ = ["VariantPosteriors", "make_estimator", "semantic_terms", "start_run", "visit"]
+
+
+def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
+    """The checked settings and the world of one run (the fixed tour's or the closed loop's).
+
+    Parameters
+    ----------
+    source : str or (2,) array_like
+        :func:`parse_source`.
+    seed : int
+        World seed.
+    estimator : {"infotaxis", "pmfs"}
+    config : ExperimentConfig or None
+        None: the defaults.
+    world : psgsl_pgm.sim.World, optional, keyword-only
+        A prepared world (default: ``world_spec.make_world(seed, source, warm_up=config.warm_up)``).
+    world_spec : psgsl_pgm.sim.WorldSpec, optional, keyword-only
+        Default: the embedded house, :func:`psgsl_pgm.sim.default_world`.
+
+    Returns
+    -------
+    config : ExperimentConfig
+    spec : str or tuple
+        The parsed source.
+    setting : psgsl_pgm.sim.WorldSpec
+        ``world_spec`` or the embedded house.
+    world : psgsl_pgm.sim.World
+    """
+    config = ExperimentConfig() if config is None else config
+    if not isinstance(config, ExperimentConfig):
+        raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")
+    if estimator not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"seed must be an integer, got {seed!r}")
+    spec = parse_source(source)
+    setting = default_world() if world_spec is None else world_spec
+    if world is None:
+        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
+    return config, spec, setting, world
 
 
 def semantic_terms(maps, likelihood, class_prior):

@@ -19,11 +19,10 @@ from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
-from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import error_and_spread
-from ..experiment._step import VariantPosteriors, visit
+from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
-from ..sim import default_world
 from ._metrics import credible_region
 from ._policies import POLICIES, Situation, choose
 from ._space import FreeSpace
@@ -215,24 +214,14 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     SearchRun
     """
 
-    config = ExperimentConfig() if config is None else config
     search = SearchConfig() if search is None else search
-    if not isinstance(config, ExperimentConfig):
-        raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")
     if not isinstance(search, SearchConfig):
         raise TypeError(f"search must be a SearchConfig, got {type(search).__name__}")
     if policy not in POLICIES:
         raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
-    if estimator not in ESTIMATORS:
-        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise TypeError(f"seed must be an integer, got {seed!r}")
-    spec = parse_source(source)
-    setting = default_world() if world_spec is None else world_spec
-    if world is None:
-        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
+    config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
     house = world.house
     start_xy = search.start if world_spec is None or world_spec.start is None else tuple(setting.start_for(house))
     if space is None:
