@@ -1,13 +1,15 @@
-"""CPD helpers shared by both networks: evidence nodes, the ontology node and the strict normalisation check."""
+"""CPD helpers shared by both networks: evidence nodes, the ontology node, the strict normalisation check and the
+assembly of a checked network."""
 
 from __future__ import annotations
 
 import numpy as np
 from pgmpy.factors.discrete import TabularCPD
+from pgmpy.models import DiscreteBayesianNetwork
 
 from ._names import EVIDENCE_STATES
 
-__all__ = ["check_normalised", "evidence_cpd", "root_cpd", "scaled"]
+__all__ = ["assemble", "check_normalised", "evidence_cpd", "root_cpd", "scaled"]
 
 _STRICT_ATOL = 1e-12
 
@@ -87,3 +89,15 @@ def check_normalised(model, *, atol: float = _STRICT_ATOL) -> bool:
         if error > atol:
             raise ValueError(f"CPD of {node!r} has a column summing to 1 ± {error:.3g}, more than atol = {atol:g}")
     return True
+
+
+def assemble(cpds, edges) -> DiscreteBayesianNetwork:
+    """The network of ``cpds`` (one per node, in that order) and ``edges``, checked by pgmpy's ``check_model`` and
+    by :func:`check_normalised`."""
+    model = DiscreteBayesianNetwork()
+    model.add_nodes_from(cpd.variable for cpd in cpds)
+    model.add_edges_from(edges)
+    model.add_cpds(*cpds)
+    model.check_model()
+    check_normalised(model)
+    return model

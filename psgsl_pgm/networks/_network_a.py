@@ -6,7 +6,7 @@ import numpy as np
 from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
-from ._cpds import check_normalised, evidence_cpd, root_cpd
+from ._cpds import assemble, evidence_cpd, root_cpd
 from ._names import GAMMA, G_NODE, SOURCE, object_node, observation_node, zeta_node
 from .._problem import SemanticGSLProblem
 
@@ -89,10 +89,4 @@ def build_network_a(problem: SemanticGSLProblem) -> DiscreteBayesianNetwork:
         z_edges, z_cpds = object_evidence(problem, c)
         edges.extend(z_edges)
         cpds.extend(z_cpds)
-    model = DiscreteBayesianNetwork()
-    model.add_nodes_from(cpd.variable for cpd in cpds)
-    model.add_edges_from(edges)
-    model.add_cpds(*cpds)
-    model.check_model()
-    check_normalised(model)
-    return model
+    return assemble(cpds, edges)

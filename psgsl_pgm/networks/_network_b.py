@@ -6,7 +6,7 @@ import numpy as np
 from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
-from ._cpds import check_normalised, evidence_cpd, root_cpd
+from ._cpds import assemble, evidence_cpd, root_cpd
 from ._names import (
     ALPHA,
     ALPHA_STATES,
@@ -143,10 +143,4 @@ def build_network_b(problem: SemanticGSLProblem, constraint: str = "chain") -> D
     else:
         edges.extend((s, ALPHA) for s in s_nodes)
         cpds.append(_table_alpha(s_nodes))
-    model = DiscreteBayesianNetwork()
-    model.add_nodes_from(cpd.variable for cpd in cpds)
-    model.add_edges_from(edges)
-    model.add_cpds(*cpds)
-    model.check_model()
-    check_normalised(model)
-    return model
+    return assemble(cpds, edges)
