@@ -1,4 +1,5 @@
-"""Independent reference computations for Network A (no code shared with psgsl_pgm).
+"""Independent reference computations for Network A, and the exact line-of-sight geometry (no code shared with
+psgsl_pgm).
 
 The model: S ~ π over n cells; γ ~ p(γ); O_c | S = c, γ ~ L[γ]; O_c | S ≠ c ~ β; each observation z_cj of
 cell c has likelihood lik[c][j] = p(z_cj | O_c); G | S has likelihood g = p(g | S = c); ζ_j | γ has
@@ -8,6 +9,8 @@ likelihood p(ζ_j | γ). Two references:
 * :func:`product_posterior` evaluates p(S = c, γ | ·) ∝ π_c p(γ) Π_j p(ζ_j|γ) p(g|c) Π_n p(z_n | S=c, γ)
   with p(z_n | S = c, γ) = Σ_i p(z_n | o_i) p(o_i | S = c, γ) for every (c, n): O(n² k), in log space,
   without the cancellation of the closed form.
+
+:func:`touches` is the line-of-sight rule's reference: exact integer geometry of a segment and a cell.
 """
 
 from __future__ import annotations
@@ -145,3 +148,14 @@ def mutual_information(p: Problem, cell: int, *, predictive="exact") -> float:
         zl = p.cell_lik()[cell] * p.beta
         weights = zl / zl.sum()  # p(o_cell | z_cell) under the prior β
     return entropy(ps) - float(weights @ h_cond)
+
+
+def touches(a, b, r, c) -> bool:
+    """Does the segment between the centres of cells a and b meet the closed square of cell (r, c)?
+    Exact integer geometry in doubled coordinates (independent of the traversal in psgsl_pgm._sight)."""
+    ax, ay, bx, by = 2 * a[1] + 1, 2 * a[0] + 1, 2 * b[1] + 1, 2 * b[0] + 1
+    x0, x1, y0, y1 = 2 * c, 2 * c + 2, 2 * r, 2 * r + 2
+    if max(ax, bx) < x0 or min(ax, bx) > x1 or max(ay, by) < y0 or min(ay, by) > y1:
+        return False
+    s = [np.sign((bx - ax) * (y - ay) - (by - ay) * (x - ax)) for x in (x0, x1) for y in (y0, y1)]
+    return not (all(v > 0 for v in s) or all(v < 0 for v in s))

@@ -17,16 +17,7 @@ from psgsl_pgm import GridMap, field_of_view
 from psgsl_pgm._grid import free_space_graph
 from psgsl_pgm.sim import Camera, LineOfSightCache, cells_clear
 
-
-def _touches(a, b, r, c) -> bool:
-    """Does the segment between the centres of cells a and b meet the closed square of cell (r, c)?
-    Exact integer geometry in doubled coordinates, independent of both implementations."""
-    ax, ay, bx, by = 2 * a[1] + 1, 2 * a[0] + 1, 2 * b[1] + 1, 2 * b[0] + 1
-    x0, x1, y0, y1 = 2 * c, 2 * c + 2, 2 * r, 2 * r + 2
-    if max(ax, bx) < x0 or min(ax, bx) > x1 or max(ay, by) < y0 or min(ay, by) > y1:
-        return False
-    s = [np.sign((bx - ax) * (y - ay) - (by - ay) * (x - ax)) for x in (x0, x1) for y in (y0, y1)]
-    return not (all(v > 0 for v in s) or all(v < 0 for v in s))
+from .brute_force import touches
 
 
 def _brute_force_view(occ, pose, max_range, half_angle):
@@ -42,7 +33,7 @@ def _brute_force_view(occ, pose, max_range, half_angle):
             if d > max_range or not (abs(bearing) <= half_angle or d < 1e-12):
                 continue
             out[r, c] = not any(
-                occ[rr, cc] and (rr, cc) not in ((r, c), (r0, c0)) and _touches((r0, c0), (r, c), rr, cc)
+                occ[rr, cc] and (rr, cc) not in ((r, c), (r0, c0)) and touches((r0, c0), (r, c), rr, cc)
                 for rr in range(min(r, r0), max(r, r0) + 1)
                 for cc in range(min(c, c0), max(c, c0) + 1)
             )

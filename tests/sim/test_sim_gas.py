@@ -17,19 +17,10 @@ from psgsl_pgm.sim import (
     read_gaden_config,
 )
 
+from ..core.brute_force import touches
+
 
 # ---- line of sight -------------------------------------------------------------------------------------------
-def _touches(a, b, r, c):
-    """Does the segment between the centres of cells a and b meet the closed square of cell (r, c)?
-    Exact integer geometry in doubled coordinates (independent of the traversal in psgsl_pgm._sight)."""
-    ax, ay, bx, by = 2 * a[1] + 1, 2 * a[0] + 1, 2 * b[1] + 1, 2 * b[0] + 1
-    x0, x1, y0, y1 = 2 * c, 2 * c + 2, 2 * r, 2 * r + 2
-    if max(ax, bx) < x0 or min(ax, bx) > x1 or max(ay, by) < y0 or min(ay, by) > y1:
-        return False
-    s = [np.sign((bx - ax) * (y - ay) - (by - ay) * (x - ax)) for x in (x0, x1) for y in (y0, y1)]
-    return not (all(v > 0 for v in s) or all(v < 0 for v in s))
-
-
 def test_cells_clear_matches_exact_geometry():
     rng = np.random.default_rng(0)
     for trial in range(4):
@@ -42,7 +33,7 @@ def test_cells_clear_matches_exact_geometry():
         for i in range(len(a)):
             rs = range(min(a[i, 0], b[i, 0]), max(a[i, 0], b[i, 0]) + 1)
             cs = range(min(a[i, 1], b[i, 1]), max(a[i, 1], b[i, 1]) + 1)
-            blocked = any(occ[r, c] and _touches(a[i], b[i], r, c) for r in rs for c in cs)
+            blocked = any(occ[r, c] and touches(a[i], b[i], r, c) for r in rs for c in cs)
             assert got[i] == (not blocked), (trial, a[i], b[i])
 
 
