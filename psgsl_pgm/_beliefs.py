@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
+from ._ratios import likelihood_ratio
 from ._validate import as_array, as_float_array, check_distribution, check_last_axis, check_nonnegative, describe
 
 __all__ = ["update_class_probs", "room_evidence"]
@@ -106,7 +107,8 @@ def room_evidence(room_labels, room_class_table, class_prior):
     Returns
     -------
     factor : (..., k) ndarray
-        p(o | room_c) / p(o), float64.
+        p(o | room_c) / p(o), float64 (a room whose ratios would exceed float64, under a prior near 1e-310,
+        has them scaled to a maximum of 1: the same likelihood).
 
     Examples
     --------
@@ -144,6 +146,5 @@ def room_evidence(room_labels, room_class_table, class_prior):
             "room makes possible; p(o | room) / p(o) is undefined there"
         )
     ratios = np.ones((n_rooms + 1, k))
-    np.divide(table, prior, out=ratios[:n_rooms], where=~zero)  # p(o|r)/p(o)
-    ratios[:n_rooms, zero] = 0.0
+    ratios[:n_rooms] = likelihood_ratio(table, prior, zero)  # p(o|r)/p(o), 0 for classes of zero prior
     return ratios[labels]  # label -1 picks the last row: ones

@@ -6,7 +6,8 @@ the class beliefs:
     p(s_c | z, ζ) ∝ Σ_γ p(γ | ζ) Σ_i p(o_ci | z_c) / p(o_ci) · p(o_ci | s_c, γ) = p(o_c | z_c) · ρ
 
 with the *class ratio* ρ_i = Σ_γ p(γ | ζ) p(o_i | s, γ) / p(o_i). Everything per cell is then a dot product
-with ρ; this module builds and validates ρ once.
+with ρ; this module builds and validates ρ once. :func:`likelihood_ratio` is the division p(o | ·) / p(o) itself,
+for ρ and for the room evidence p(o | room) / p(o).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import numpy as np
 
 from ._validate import as_float_array, check_distribution, check_nonnegative, describe
 
-__all__ = ["ClassRatio", "class_ratio"]
+__all__ = ["ClassRatio", "class_ratio", "likelihood_ratio"]
 
 
 @dataclass(frozen=True)
@@ -91,8 +92,36 @@ def class_ratio(source_likelihood, class_prior, gas_probs=None) -> ClassRatio:
             f"class_prior is zero for classes {bad} to which source_likelihood gives positive probability; "
             "p(o | z) / p(o) is undefined there — give those classes a positive prior"
         )
-    rho = np.zeros(k)
-    np.divide(mix, prior, out=rho, where=~zero)  # ρ_i = p(o_i | s) / p(o_i)
+    rho = likelihood_ratio(mix, prior, zero)  # ρ_i = p(o_i | s) / p(o_i)
     rho /= rho.max()  # scale-free; keeps Σ over 1e7 cells far from overflow even for p(o_i) ~ 1e-300
     check_nonnegative(rho, "class ratio p(o|s)/p(o)")
     return ClassRatio(rho=rho, class_prior=prior, zero_prior=zero)
+
+
+def likelihood_ratio(num: np.ndarray, prior: np.ndarray, zero: np.ndarray) -> np.ndarray:
+    """``num / prior`` along the last axis (each row a likelihood over the k classes), 0 where ``zero``.
+
+    A row whose ratio would exceed float64 (a prior of 1e-310 under a likelihood of 0.5) is computed in log space
+    and scaled to a maximum of 1 — a likelihood row means the same at any scale. Every other row is the plain
+    quotient.
+
+    Parameters
+    ----------
+    num : (..., k) ndarray
+        p(o | ·), finite and non-negative.
+    prior : (k,) ndarray
+        p(o), finite and non-negative.
+    zero : (k,) ndarray of bool
+        Classes whose ratio is set to 0 (``prior == 0``, where ``num`` is 0 too).
+    """
+    out = np.zeros(np.broadcast_shapes(num.shape, prior.shape))
+    with np.errstate(over="ignore"):
+        np.divide(num, prior, out=out, where=~zero)
+    rows = out.reshape(-1, out.shape[-1])
+    big = ~np.isfinite(rows).all(axis=-1)
+    if big.any():
+        with np.errstate(divide="ignore"):
+            logs = np.log(np.broadcast_to(num, out.shape).reshape(rows.shape)[big]) - np.log(np.where(zero, 1.0, prior))
+        logs[:, zero] = -np.inf
+        rows[big] = np.exp(logs - logs.max(axis=-1, keepdims=True))
+    return out
