@@ -110,7 +110,8 @@ def semantic_information_gain(
     if olfactory is None:
         f, f_uniform = np.empty(0), 1.0 / max(n, 1)
     else:
-        f = np.ascontiguousarray(cell_distribution(olfactory, "olfactory", cell_shape), dtype=np.float64)
+        f = cell_distribution(olfactory, "olfactory", cell_shape, like="class_probs")
+        f = np.ascontiguousarray(f, dtype=np.float64)
         f, f_uniform = f.reshape(-1), 0.0
     paper = predictive == "paper"
     # one pass over the beliefs: w_n, the Jensen gap, central moments μ_j (and ν_j) per cell, U = Σ f w, and

@@ -34,8 +34,8 @@ __all__ = ["MAX_CELLS", "SemanticGSLProblem"]
 #: (The exact networks are far smaller in practice: their inference is exponential in what they couple.)
 MAX_CELLS = 2_000_000
 
-def _array(x, name: str, ndim: int, *, keep_float32: bool = False) -> np.ndarray:
-    """Validated real array (the shared vocabulary's type contract) with ``ndim`` dimensions, finite and
+def _array(x, name: str, ndim: int | None, *, keep_float32: bool = False) -> np.ndarray:
+    """Validated real array (the shared vocabulary's type contract) with ``ndim`` dimensions (any: None), finite and
     non-negative; float64 unless ``keep_float32`` and ``x`` is float32 (so that its sums are judged with
     float32's tolerance)."""
     arr = as_float_array(x, name, ndim=ndim) if keep_float32 else as_float_array(x, name, dtype=np.float64, ndim=ndim)
@@ -136,7 +136,7 @@ class SemanticGSLProblem:
         gas_names=None,
         shape=None,
     ):
-        lik = _array(source_likelihood, "source_likelihood", np.ndim(source_likelihood), keep_float32=True)
+        lik = _array(source_likelihood, "source_likelihood", None, keep_float32=True)
         if lik.ndim == 1:
             lik = lik[None, :]
         if lik.ndim != 2 or lik.shape[1] < 2 or lik.shape[0] < 1:

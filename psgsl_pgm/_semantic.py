@@ -123,7 +123,7 @@ def semantic_source_probability(
     weights = w.reshape(cell_shape)
     total = stats[4]  # Σ_c w_c, from the same pass
     if source_prior is not None:
-        weights *= cell_distribution(source_prior, "source_prior", cell_shape)  # p(s_c) p(z|s_c)
+        weights *= cell_distribution(source_prior, "source_prior", cell_shape, like="class_probs")  # p(s_c) p(z|s_c)
         total = np.sum(weights, dtype=np.float64)
     weights = column_sum(weights, column_axis, len(cell_shape))  # Σ_{v∈c} p(s_v|z)
     if not normalize:

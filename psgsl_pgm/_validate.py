@@ -413,10 +413,12 @@ def identifier(name: object, what: str) -> str:
     return name
 
 
-def cell_distribution(x, name: str, cell_shape: tuple) -> np.ndarray:
-    """Validate a distribution over cells (non-negative, finite, sums to 1) of shape ``cell_shape``."""
+def cell_distribution(x, name: str, cell_shape: tuple, *, like: str) -> np.ndarray:
+    """Validate a distribution over cells (non-negative, finite, sums to 1) of shape ``cell_shape``, the cells of
+    argument ``like`` (named in the message, as the other side of a mismatch)."""
     arr = as_float_array(x, name)
     if arr.shape != tuple(cell_shape):
-        raise ValueError(f"{name} must have the cells' shape {tuple(cell_shape)}, got {describe(arr)}")
+        raise ValueError(f"{name} must have the cells' shape {tuple(cell_shape)} (the cells of {like}), got "
+                         f"{describe(arr)}")
     check_distribution(arr.reshape(-1), name, sums=np.sum(arr, dtype=np.float64))
     return arr

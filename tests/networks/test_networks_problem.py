@@ -33,6 +33,7 @@ LIK, BG = [0.6, 0.3, 0.1], [0.2, 0.3, 0.5]
         (dict(source_likelihood=[1.1, -0.1, 0.0]), ValueError, "non-negative"),
         (dict(source_likelihood=[np.nan, 0.5, 0.5]), ValueError, "finite"),
         (dict(source_likelihood=[1.0]), ValueError, "k >= 2"),
+        (dict(source_likelihood=[[0.6, 0.4], [0.5]]), TypeError, "source_likelihood must be a real numeric array"),
         (dict(background=[0.5, 0.5, 0.0]), ValueError, "strictly positive"),
         (dict(background=[0.5, 0.5]), ValueError, r"shape \(3,\)"),
         (dict(cells=0), ValueError, "positive count"),
