@@ -63,9 +63,13 @@ class FilamentParams:
 
     def __post_init__(self):
         for f in fields(self):
-            v = positive(getattr(self, f.name), f"FilamentParams.{f.name}",
-                         allow_zero=f.name not in ("dt", "sigma0", "cutoff"))  # bools, strings, 10**400 refused
-            object.__setattr__(self, f.name, v)
+            object.__setattr__(self, f.name, self.checked(f.name, getattr(self, f.name), f"FilamentParams.{f.name}"))
+
+    @staticmethod
+    def checked(name: str, value, label: str) -> float:
+        """``value`` of field ``name`` as a float: positive for dt, sigma0 and cutoff, else non-negative (bools,
+        strings, 10**400 refused); messages call it ``label``."""
+        return positive(value, label, allow_zero=name not in ("dt", "sigma0", "cutoff"))
 
 
 _GADEN_KEYS = {  # GADEN key -> (field, scale to SI)
@@ -95,7 +99,9 @@ def read_gaden_config(yaml_path) -> tuple[FilamentParams, np.ndarray]:
     kwargs = {}
     for key, (name, scale) in _GADEN_KEYS.items():
         if key in data:
-            kwargs[name] = number(where, key, data[key], nonnegative=True) * scale
+            value = number(where, key, data[key], nonnegative=True) * scale
+            label = f"{where}: key '{key}'" + ("" if scale == 1.0 else " (in SI units)")
+            kwargs[name] = FilamentParams.checked(name, value, label)
     missing = [k for k in ("source_x", "source_y") if k not in data]
     if missing:
         raise ValueError(f"{where}: missing required key(s) {missing}")

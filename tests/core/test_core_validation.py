@@ -90,6 +90,8 @@ def test_update_and_room_evidence_reject():
 def test_information_gain_and_fov_reject():
     with pytest.raises(ValueError, match="predictive must be 'paper' or 'exact'"):
         semantic_information_gain(Q, LIK, PRIOR, predictive="approx")
+    with pytest.raises(ValueError, match=r"olfactory must have the cells' shape \(0, 3\) \(the cells of class_probs\)"):
+        semantic_information_gain(np.zeros((0, 3, 3)), LIK, PRIOR, olfactory=np.full((2, 3), 1 / 6))
     with pytest.raises(ValueError, match=r"olfactory must have the cells' shape"):
         semantic_information_gain(Q, LIK, PRIOR, olfactory=[1.0])
     occ = np.zeros((4, 4), bool)
@@ -118,6 +120,21 @@ def test_tiny_probabilities_do_not_underflow():
     post = update_class_probs(np.array([1e-300, 1.0]), np.array([1.0, 1e-300]))
     np.testing.assert_allclose(post, [0.5, 0.5])
     assert np.isfinite(fuse(*[np.full(10, 0.1)] * 400)).all()
+
+
+def test_priors_whose_ratios_exceed_float64_stay_finite():
+    """p(o | s) / p(o) beyond 1.8e308 (a prior of 7e-314): the ratio is scaled in log space, never inf or NaN."""
+    lik = np.array([0.4, 0.25, 0.35, 0.0])
+    prior = np.array([7.4e-314, 0.5, 0.5 - 7.4e-314, 0.0])
+    q = np.array([[0.1, 0.5, 0.4, 0.0], [0.0, 0.5, 0.5, 0.0]])
+    p = semantic_source_probability(q, lik, prior)
+    np.testing.assert_allclose(p, [1.0, 0.6 * 7.4e-314 / (0.1 * 0.4)], rtol=1e-6)  # cell 0 weighs 0.1 · 0.4 / 7.4e-314
+    gain = semantic_information_gain(q, lik, prior, predictive="exact")
+    assert np.all(np.isfinite(gain)) and np.all(gain >= 0)
+    table = np.array([[0.4, 0.3, 0.3, 0.0], [0.0, 0.5, 0.5, 0.0]])
+    f = room_evidence([0, 1, -1], table, np.array([5e-324, 0.5, 0.5, 0.0]))
+    np.testing.assert_array_equal(f[1:], [[0.0, 1.0, 1.0, 0.0], [1.0] * 4])  # rows in range: the plain quotient
+    assert f[0, 0] == 1.0 and np.all(np.isfinite(f)) and f[0, 3] == 0.0
 
 
 def test_ten_million_cells_stay_finite_and_normalised():

@@ -191,6 +191,12 @@ def test_filament_params_and_gaden_yaml(tmp_path):
     (tmp_path / "t.yaml").write_text(yaml.safe_dump({"source_x": 1.5, "source_y": "here"}))
     with pytest.raises(ValueError, match=r"t\.yaml.*'source_y' must be a number"):
         read_gaden_config(tmp_path / "t.yaml")
+    cases = (("time_step", 0, "key 'time_step' must"),  # a zero step; a radius that is 0 m once converted from cm
+             ("filament_initial_std", 1e-323, r"key 'filament_initial_std' \(in SI units\) must"))
+    for key, value, shown in cases:
+        (tmp_path / "u.yaml").write_text(yaml.safe_dump({"source_x": 1.5, "source_y": 2.0, key: value}))
+        with pytest.raises(ValueError, match=rf"u\.yaml: {shown} be a positive finite number"):
+            read_gaden_config(tmp_path / "u.yaml")
 
 
 def test_filament_model_input_errors():
