@@ -3,7 +3,7 @@
 Every node and state name is a valid XMLBIF/BIF identifier (:func:`psgsl_pgm._validate.identifier`): a letter
 followed by letters, digits or underscores, so exported files load back unchanged. Plain strings, so the
 convention lives in the core, beside :class:`psgsl_pgm._problem.SemanticGSLProblem` whose cell, class and gas
-names it builds on; ``psgsl_pgm.networks`` (pgmpy) uses it through :mod:`psgsl_pgm.networks._names`.
+names it builds on; the pgmpy networks of ``psgsl_pgm.networks`` import it from here.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ import numpy as np
 from pgmpy.inference import VariableElimination
 from pgmpy.models import DiscreteBayesianNetwork
 
-from ._names import (
+from .._network_names import (
     ALPHA,
     ALPHA_STATES,
     EVIDENCE_STATES,

@@ -7,7 +7,7 @@ from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
 from ._cpds import assemble, evidence_cpd, root_cpd
-from ._names import GAMMA, G_NODE, SOURCE, object_node, observation_node, zeta_node
+from .._network_names import GAMMA, G_NODE, SOURCE, object_node, observation_node, zeta_node
 from .._problem import SemanticGSLProblem
 
 __all__ = ["build_network_a", "gas_nodes"]

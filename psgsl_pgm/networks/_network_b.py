@@ -7,7 +7,7 @@ from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
 from ._cpds import assemble, evidence_cpd, root_cpd
-from ._names import (
+from .._network_names import (
     ALPHA,
     ALPHA_STATES,
     COUNTER_STATES,
