@@ -319,6 +319,8 @@ def real_pair(value, name: str, what: str = "an (x, y)", unit: str = "metres") -
     [1.0, 2.5]
     """
     p = _real_array(value, name, f"{what} pair of real numbers in {unit}")
+    if isinstance(value, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in value):
+        raise TypeError(f"{name} must be {what} pair of real numbers in {unit}, got {value!r}")  # (True, 2.0) is a float array
     if p.shape != (2,):
         raise ValueError(f"{name} must be {what} pair in {unit}, got shape {p.shape}")
     p = p.astype(np.float64)

@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
+from .._validate import index, positive, real_pair, unit_interval
 from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
@@ -67,19 +68,14 @@ class SearchConfig:
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "start":
-                xy = np.asarray(v, dtype=np.float64) if not isinstance(v, (str, bytes)) else None
-                if xy is None or xy.shape != (2,) or not np.isfinite(xy).all():
-                    raise ValueError(f"start must be an (x, y) position in metres, got {v!r}")
-                object.__setattr__(self, "start", (float(xy[0]), float(xy[1])))
-                continue
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not np.isfinite(v):
-                raise TypeError(f"{f.name} must be a finite number, got {v!r}")
-            if v <= 0:
-                raise ValueError(f"{f.name} must be > 0, got {v!r}")
-        if not self.credible < 1:
-            raise ValueError(f"credible must lie in (0, 1), got {self.credible!r}")
-        if int(self.n_headings) != self.n_headings:
-            raise ValueError(f"n_headings must be an integer, got {self.n_headings!r}")
+                v = tuple(real_pair(v, "start", "an (x, y)", "metres").tolist())
+            elif f.name == "n_headings":
+                v = index(v, "n_headings", minimum=1)
+            elif f.name == "credible":
+                v = unit_interval(v, "credible", low_open=True, high_open=True)
+            else:
+                v = positive(v, f.name, "metres" if f.name != "time_budget" else "seconds")
+            object.__setattr__(self, f.name, v)
 
     def to_dict(self) -> dict:
         d = asdict(self)

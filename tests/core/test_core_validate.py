@@ -75,6 +75,8 @@ def test_scalars_name_argument_expected_and_received():
         real_pair([1, 2, 3], "origin")
     with pytest.raises(TypeError, match=r"origin must be an \(x, y\) pair of real numbers in metres, got booleans"):
         real_pair([True, False], "origin")
+    with pytest.raises(TypeError, match=r"^origin must be an \(x, y\) pair of real numbers in metres, got \(True, 2.0\)$"):
+        real_pair((True, 2.0), "origin")  # numpy would read it as the floats (1.0, 2.0)
     with pytest.raises(ValueError, match=r"^b.yaml: field 'resolution' must be > 0, got 0$"):
         file_field("b.yaml", "resolution", 0, positive=True)
     with pytest.raises(ValueError, match=r"field 'resolution' must be a number, got str '1'"):

@@ -114,3 +114,12 @@ def test_search_config_is_validated():
         SearchConfig(time_budget="long")
     with pytest.raises(ValueError, match="start"):
         SearchConfig(start=(1.0,))
+    with pytest.raises(TypeError, match="start must be an"):
+        SearchConfig(start=[[1.0], [2.0, 3.0]])
+    with pytest.raises(ValueError, match="time_budget must be a positive number in seconds, got an integer too large"):
+        SearchConfig(time_budget=10**400)
+    with pytest.raises(ValueError, match=r"credible must lie in \(0, 1\)"):
+        SearchConfig(credible=1.0)
+    with pytest.raises(ValueError, match="n_headings must be an int >= 1"):
+        SearchConfig(n_headings=8.5)
+    assert SearchConfig(time_budget=12).to_dict()["time_budget"] == 12.0
