@@ -33,11 +33,10 @@ Class names go through :func:`psgsl_pgm._coco.canonical_class` (``fridge`` -> ``
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ._coco import canonical_class
+from ._validate import check_keys, file_field
 
 __all__ = ["is_lab_format", "lab_ontology", "lab_room_table"]
 
@@ -47,15 +46,6 @@ OTHER = "other"
 def is_lab_format(data) -> bool:
     """Whether a parsed YAML document is the lab's ontology layout (top-level ``Gases``)."""
     return isinstance(data, dict) and "Gases" in data
-
-
-def _num(where: str, key: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{where}: key '{key}' must be a number, got {type(value).__name__} {value!r}")
-    v = float(value)
-    if not math.isfinite(v) or v < 0:
-        raise ValueError(f"{where}: key '{key}' must be a finite number >= 0, got {value!r}")
-    return v
 
 
 def _class_row(where: str, key: str, probs) -> dict:
@@ -68,17 +58,12 @@ def _class_row(where: str, key: str, probs) -> dict:
         cname = canonical_class(name)
         if cname in row:
             raise ValueError(f"{where}: key '{key}.{name}': class {cname!r} is listed twice (aliases included)")
-        row[cname] = _num(where, f"{key}.{name}", value)
+        row[cname] = file_field(where, f"{key}.{name}", value, nonnegative=True)
     return row
 
 
 def _room_rows(room_data: dict, where: str):
-    unknown = sorted(str(k) for k in room_data if k not in ("number_classes", "room_categories"))
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {unknown}; expected 'number_classes' and 'room_categories'")
-    for key in ("number_classes", "room_categories"):
-        if key not in room_data:
-            raise ValueError(f"{where}: missing required key '{key}'")
+    check_keys(where, room_data, required=("number_classes", "room_categories"))
     n = room_data["number_classes"]
     if isinstance(n, bool) or not isinstance(n, int) or n < 2:
         raise ValueError(f"{where}: key 'number_classes' must be an integer >= 2, got {n!r}")
@@ -157,23 +142,14 @@ def lab_ontology(data: dict, where: str, *, room_data: dict | None = None, room_
     dict
         Keyword arguments ``classes, gases, source_table, class_prior, rooms, room_table``.
     """
-    unknown = sorted(str(k) for k in data if k != "Gases")
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {unknown} next to 'Gases' in the lab's ontology format")
+    check_keys(where, data, required=("Gases",))
     entries = data["Gases"]
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"{where}: key 'Gases' must be a non-empty list of {{gas, probs}} entries, got {entries!r}")
     gases, rows = [], []
     for i, entry in enumerate(entries):
         key = f"Gases[{i}]"
-        if not isinstance(entry, dict):
-            raise ValueError(f"{where}: key '{key}' must be a mapping with 'gas' and 'probs', got {entry!r}")
-        bad = sorted(str(k) for k in entry if k not in ("gas", "probs"))
-        if bad:
-            raise ValueError(f"{where}: key '{key}' has unknown key(s) {bad}; expected 'gas' and 'probs'")
-        for req in ("gas", "probs"):
-            if req not in entry:
-                raise ValueError(f"{where}: key '{key}' lacks '{req}'")
+        check_keys(f"{where}: key '{key}'", entry, required=("gas", "probs"))
         gas = entry["gas"]
         if not isinstance(gas, str) or not gas.strip():
             raise ValueError(f"{where}: key '{key}.gas' must be a gas name, got {gas!r}")

@@ -20,7 +20,7 @@ Vocabulary
 :func:`real_number`, :func:`positive`, :func:`unit_interval`, :func:`index` (scalars); :func:`real_pair`;
 :func:`flag`; :func:`names` (a list of names); :func:`bool_mask`; :func:`as_float_array`, :func:`check_nonnegative`, :func:`check_last_axis`,
 :func:`check_distribution` / :func:`distribution`, :func:`check_sums`, :func:`as_array` (arrays); :func:`file_field` (a number
-read from a file, named by file and field).
+read from a file, named by file and field), :func:`check_keys` (the keys of a mapping read from a file).
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ __all__ = [
     "bool_mask",
     "cell_distribution",
     "check_distribution",
+    "check_keys",
     "check_last_axis",
     "check_nonnegative",
     "check_sums",
@@ -355,6 +356,28 @@ def bool_mask(x, name: str, shape=None, *, ndim: int = 2) -> np.ndarray:
     out = np.array(arr, dtype=bool)
     out.flags.writeable = False
     return out
+
+
+def check_keys(where: str, data: dict, *, required=(), optional=()) -> None:
+    """Refuse unknown and missing keys of a mapping read from ``where`` (a file, or a file and key).
+
+    Examples
+    --------
+    >>> check_keys("w.yaml", {"mapp": 1}, required=("map",))
+    Traceback (most recent call last):
+    ...
+    ValueError: w.yaml: unknown key(s) ['mapp']; allowed keys are ['map']
+    """
+    if not isinstance(data, dict):
+        raise ValueError(f"{where}: expected a mapping, got {type(data).__name__} {data!r}")
+    unknown = sorted(str(k) for k in data if k not in required and k not in optional)
+    if unknown:
+        raise ValueError(
+            f"{where}: unknown key(s) {unknown}; allowed keys are {sorted(set(required) | set(optional))}"
+        )
+    missing = [k for k in required if k not in data]
+    if missing:
+        raise ValueError(f"{where}: missing required key(s) {missing}")
 
 
 def file_field(where: str, field: str, value, *, positive: bool = False, nonnegative: bool = False,

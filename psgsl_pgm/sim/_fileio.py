@@ -13,26 +13,12 @@ import numpy as np
 from .._validate import file_field
 from .._yaml import load_yaml_mapping
 
-__all__ = ["MAX_IMAGE_PIXELS", "read_yaml_mapping", "check_keys", "number", "number_list", "read_grey_image", "resolve"]
+__all__ = ["MAX_IMAGE_PIXELS", "read_yaml_mapping", "number", "number_list", "read_grey_image", "resolve"]
 
 
 def read_yaml_mapping(path) -> tuple[Path, dict]:
     """Read a YAML file whose top level must be a mapping (the project's safe loader, :mod:`psgsl_pgm._yaml`)."""
     return load_yaml_mapping(path)
-
-
-def check_keys(where: str, data: dict, *, required=(), optional=()) -> None:
-    """Refuse unknown and missing keys of a mapping read from ``where``."""
-    if not isinstance(data, dict):
-        raise ValueError(f"{where}: expected a mapping, got {type(data).__name__} {data!r}")
-    unknown = sorted(str(k) for k in data if k not in required and k not in optional)
-    if unknown:
-        raise ValueError(
-            f"{where}: unknown key(s) {unknown}; allowed keys are {sorted(set(required) | set(optional))}"
-        )
-    missing = [k for k in required if k not in data]
-    if missing:
-        raise ValueError(f"{where}: missing required key(s) {missing}")
 
 
 number = file_field  # the shared vocabulary's reader of a number from a file field

@@ -22,8 +22,8 @@ import numpy as np
 import yaml
 
 from .._grid import GridMap
-from .._validate import as_float_array, real_number, real_pair
-from ._fileio import check_keys, number, number_list, read_yaml_mapping
+from .._validate import as_float_array, check_keys, real_number, real_pair
+from ._fileio import number, number_list, read_yaml_mapping
 
 __all__ = ["SceneObject", "box_footprint", "load_objects", "save_objects"]
 

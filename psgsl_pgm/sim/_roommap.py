@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ._fileio import check_keys, number, read_grey_image, read_yaml_mapping, resolve
+from ._fileio import number, read_grey_image, read_yaml_mapping, resolve
 from .._grid import GridMap
+from .._validate import check_keys
 
 __all__ = ["load_room_map", "save_room_map"]
 

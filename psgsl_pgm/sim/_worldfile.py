@@ -43,9 +43,10 @@ import numpy as np
 
 from .._class_maps import read_class_beliefs
 from .._coco import canonical_class
-from ._fileio import check_keys, number, number_list, read_grey_image, read_yaml_mapping, resolve
+from ._fileio import number, number_list, read_grey_image, read_yaml_mapping, resolve
 from .._grid import GridMap
 from .._ontology import Ontology
+from .._validate import check_keys
 from ._house import House, default_house, segment_mask
 from ._house_ontology import house_ontology
 from ._objects import SceneObject, load_objects
