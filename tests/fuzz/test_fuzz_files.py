@@ -103,10 +103,15 @@ def _load(name: str, files: dict):
         return exc, d
 
 
-def _named(exc: BaseException, files, what: str) -> None:
-    msg = str(exc)
+def _outcome(out, files, what: str) -> None:
+    """Record a load's outcome: a result, or an error of one line naming one of ``files``."""
+    if not isinstance(out, Exception):
+        record("accepted")
+        return
+    msg = str(out)
     assert any(n in msg for n in files), f"{what}: the message names none of the files {sorted(files)}: {msg!r}"
-    assert "\n" not in msg.strip() or isinstance(exc, FileNotFoundError), f"{what}: message of several lines"
+    assert "\n" not in msg.strip() or isinstance(out, FileNotFoundError), f"{what}: message of several lines"
+    record("refused")
 
 
 @pytest.mark.parametrize("name", SETS)
@@ -142,11 +147,7 @@ def test_corrupted_bytes_give_a_result_or_an_error_naming_the_file(name, data):
                             data.draw(st.integers(0, 255), label="byte"),
                             data.draw(st.binary(min_size=1, max_size=64), label="chunk"))
     out, _ = _load(name, files)
-    if isinstance(out, Exception):
-        _named(out, files, f"{name}: {how} {victim}")
-        record("refused")
-    else:
-        record("accepted")
+    _outcome(out, files, f"{name}: {how} {victim}")
 
 
 # ------------------------------------------------------------------------------------------- text mutations
@@ -172,11 +173,7 @@ def test_other_encodings_are_read_or_refused_naming_the_file(name, data):
         return
     if enc in ("latin-1", "cp1252", "utf-16-le", "utf-32"):
         assert isinstance(out, Exception), f"{name}: {enc} bytes read as if they were UTF-8"
-    if isinstance(out, Exception):
-        _named(out, files, f"{name}: {enc}")
-        record("refused")
-    else:
-        record("accepted")
+    _outcome(out, files, f"{name}: {enc}")
 
 
 _NUMBER = re.compile(rb"(?<![\w.])-?\d+(\.\d+)?(?![\w.])")
@@ -198,11 +195,7 @@ def test_hostile_numbers_in_yaml_fields_are_refused_or_read_cleanly(name, data):
     out, _ = _load(name, files)
     if new in (str(HUGE).encode(), b"-" + str(HUGE).encode(), b".nan", b"-.inf", b"1.0e+400", b"'0.5'", b'"3"'):
         assert isinstance(out, Exception), f"{name}: {new[:20]!r} in a number field accepted silently"
-    if isinstance(out, Exception):
-        _named(out, files, f"{name}: {new[:20]!r}")
-        record("refused")
-    else:
-        record("accepted")
+    _outcome(out, files, f"{name}: {new[:20]!r}")
 
 
 @pytest.mark.parametrize("name", [n for n in TEXT_SETS if n != "gaden_csv"])
@@ -242,11 +235,7 @@ def test_image_headers_that_lie_are_refused_naming_the_image(name, data):
         assert isinstance(out, ValueError) and f"{MAX_IMAGE_PIXELS}" in str(out), out
     elif not consistent:
         assert isinstance(out, Exception), f"{name}: a {w} x {h} (max {maxval}) header over {len(body)} bytes accepted"
-    if isinstance(out, Exception):
-        _named(out, files, f"{name}: header {w} x {h}")
-        record("refused")
-    else:
-        record("accepted")
+    _outcome(out, files, f"{name}: header {w} x {h}")
 
 
 def test_a_room_background_level_out_of_range_is_refused():
