@@ -17,6 +17,7 @@ query cell; see :mod:`psgsl_pgm._sight`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 
@@ -166,6 +167,10 @@ class FilamentModel:
             raise ValueError(f"outlet must be an (H, W) = {grid.shape} mask, got {outlet.shape}")
         self.outlet = outlet
         self._walls = grid.occupancy
+        self._walls_flat = self._walls.ravel()
+        self._stays_flat = np.pad(~outlet, 1).ravel()  # free of outlets, inside the map: the filament stays
+        self._origin = np.array(grid.origin)
+        self._source_cell = grid.world_to_cell(self.source)[None]
         self._rng = np.random.default_rng(seed)
         # one int8 table per cached sensor cell: at most ~32 MB of tables on large maps
         self._los = LineOfSightCache(self._walls, capacity=int(np.clip(2**25 // self._walls.size, 8, 256)))
@@ -183,80 +188,105 @@ class FilamentModel:
         return self.births.size
 
     # --- dynamics ---------------------------------------------------------------------------------------
+    # Per step the filaments are whole arrays: flat cell indices with take and boolean selections with
+    # compress (much cheaper than fancy indexing of (F, 2) arrays), and the per-filament arithmetic is
+    # the same element-wise IEEE operations in the same order as the plain formulas in the docstrings.
+    def _cells_of(self, xy) -> np.ndarray:
+        """(n, 2) int64 (row, col) of (n, 2) points, as :meth:`GridMap.world_to_cell` (no validation)."""
+        return np.floor((xy - self._origin) / self.grid.resolution).astype(np.int64)[:, ::-1]
+
+    def _walls_at(self, r, q) -> np.ndarray:
+        """Whether cells (r, q) are walls; indices outside the map are clipped to its border."""
+        h, w = self._walls.shape
+        flat = np.minimum(np.maximum(r, 0), h - 1) * w + np.minimum(np.maximum(q, 0), w - 1)
+        return self._walls_flat.take(flat)
+
     def _blocked_short(self, p0, p1, c0, c1) -> np.ndarray:
-        """Moves of less than one cell per axis: is any cell on the path (after the first) a wall?"""
-        walls = self._walls
-        h, w = walls.shape
-        r1 = np.clip(c1[:, 0], 0, h - 1)
-        q1 = np.clip(c1[:, 1], 0, w - 1)
-        blocked = walls[r1, q1]
-        diag = (c1[:, 0] != c0[:, 0]) & (c1[:, 1] != c0[:, 1])
-        if diag.any():
-            i = np.flatnonzero(diag)
+        """Moves of less than one cell per axis: is any cell on the path (after the first) a wall?
+
+        The end cell, and for a diagonal move the cell of the boundary crossed first (column boundary at
+        fraction t_x of the move, row boundary at t_y; both at a corner).
+        """
+        r0, q0, r1, q1 = c0[:, 0], c0[:, 1], c1[:, 0], c1[:, 1]
+        blocked = self._walls_at(r1, q1)
+        i = ((r1 != r0) & (q1 != q0)).nonzero()[0]  # diagonal moves
+        if i.size:
             res, (ox, oy) = self.grid.resolution, self.grid.origin
-            d = p1[i] - p0[i]
-            xb = ox + np.maximum(c0[i, 1], c1[i, 1]) * res  # the column boundary crossed
-            yb = oy + np.maximum(c0[i, 0], c1[i, 0]) * res
-            tx = (xb - p0[i, 0]) / d[:, 0]
-            ty = (yb - p0[i, 1]) / d[:, 1]
-            ra, qa = np.clip(c0[i, 0], 0, h - 1), np.clip(c1[i, 1], 0, w - 1)  # column first
-            rb, qb = np.clip(c1[i, 0], 0, h - 1), np.clip(c0[i, 1], 0, w - 1)  # row first
-            blocked[i] |= ((tx <= ty) & walls[ra, qa]) | ((ty <= tx) & walls[rb, qb])
+            a, b = p0.take(i, axis=0), p1.take(i, axis=0)
+            ri0, qi0, ri1, qi1 = r0[i], q0[i], r1[i], q1[i]
+            xb = ox + np.maximum(qi0, qi1) * res  # the column boundary crossed
+            yb = oy + np.maximum(ri0, ri1) * res
+            tx = (xb - a[:, 0]) / (b[:, 0] - a[:, 0])
+            ty = (yb - a[:, 1]) / (b[:, 1] - a[:, 1])
+            blocked[i] |= ((tx <= ty) & self._walls_at(ri0, qi1)) | ((ty <= tx) & self._walls_at(ri1, qi0))
         return blocked
 
     def _blocked(self, p0, p1, c0) -> tuple[np.ndarray, np.ndarray]:
-        """(blocked, end cells) for moves p0 -> p1 starting in cells c0."""
-        c1 = self.grid.world_to_cell(p1)
-        steps = np.ceil(np.abs(p1 - p0).max(axis=1) / (0.999 * self.grid.resolution)).astype(np.int64)
-        blocked = np.zeros(len(p0), bool)
-        short = steps <= 1
-        blocked[short] = self._blocked_short(p0[short], p1[short], c0[short], c1[short])
-        long_ = np.flatnonzero(~short)
-        if long_.size:  # rare long moves (jets at windows): split into sub-moves of < 1 cell per axis
-            n = steps[long_]
-            a, b = p0[long_], p1[long_]
-            prev_p, prev_c = a, c0[long_]
-            bad = np.zeros(long_.size, bool)  # met a wall before leaving the map
-            left = np.zeros(long_.size, bool)  # left the map (through a free border cell)
-            for k in range(1, int(n.max()) + 1):
-                frac = np.minimum(k / n, 1.0)[:, None]
-                p = a + (b - a) * frac
-                c = self.grid.world_to_cell(p)
-                active = ~bad & ~left
-                bad |= active & self._blocked_short(prev_p, p, prev_c, c)
-                left |= ~bad & ~self.grid.contains(c)
-                prev_p, prev_c = p, c
-            blocked[long_] = bad
+        """(blocked, end cells) for moves p0 -> p1 starting in cells c0.
+
+        A move of less than one cell per axis is checked as it is (:meth:`_blocked_short`); a longer one (jets
+        at windows) as n sub-moves of less than one cell per axis, sub-move k ending at a + (b − a) min(k / n, 1):
+        it is blocked if the first sub-move that meets a wall or leaves the map meets a wall. Every (sub-)move
+        is checked in one pass.
+        """
+        f = p0.shape[0]
+        c1 = self._cells_of(p1)
+        d = np.abs(p1 - p0)
+        steps = np.ceil(np.maximum(d[:, 0], d[:, 1]) / (0.999 * self.grid.resolution))
+        long_ = (steps > 1).nonzero()[0]
+        if not long_.size:
+            return self._blocked_short(p0, p1, c0, c1), c1
+        n = steps[long_].astype(np.int64)
+        a, b, ca = p0.take(long_, axis=0), p1.take(long_, axis=0), c0.take(long_, axis=0)
+        m = a.shape[0]
+        k = np.arange(1, int(n.max()) + 1)[:, None]
+        ends = (a + (b - a) * np.minimum(k / n, 1.0)[..., None]).reshape(-1, 2)  # (K·m, 2), sub-move-major
+        cells = self._cells_of(ends)
+        blocked = self._blocked_short(np.concatenate([p0, a, ends[:-m]]), np.concatenate([p1, ends]),
+                                      np.concatenate([c0, ca, cells[:-m]]), np.concatenate([c1, cells]))
+        wall = blocked[f:].reshape(-1, m)
+        event = wall | ~self.grid.contains(cells).reshape(-1, m)  # met a wall, or left the map
+        blocked = blocked[:f]
+        blocked[long_] = wall[np.argmax(event, axis=0), np.arange(m)]  # the first event (none: not blocked)
         return blocked, c1
 
     def release(self, count: int) -> None:
         """Add ``count`` filaments at the source, born now."""
         if count <= 0:
             return
-        self.positions = np.concatenate([self.positions, np.broadcast_to(self.source, (count, 2))])
+        self.positions = np.concatenate([self.positions, np.repeat(self.source[None], count, axis=0)])
         self.births = np.concatenate([self.births, np.full(count, self.time)])
-        self._cells = np.concatenate([self._cells, np.broadcast_to(self.grid.world_to_cell(self.source), (count, 2))])
+        self._cells = np.concatenate([self._cells, np.repeat(self._source_cell, count, axis=0)])
         self.n_released += count
 
     def step(self, n: int = 1) -> None:
         """Advance ``n`` time steps."""
         p = self.params
+        h, w = self.grid.shape
+        stays = self._stays_flat
         for _ in range(int(n)):
             # releases so that floor(t · rate) filaments exist after time t (exact for any rate)
-            due = int(np.floor((self._step + 1) * p.dt * p.release_rate + 1e-9)) - self.n_released
-            self.release(due)
-            vel = self.wind.velocities[self.wind.index(self.time)]
-            c0 = self._cells
-            disp = vel[c0[:, 0], c0[:, 1]] * p.dt + self._rng.normal(0.0, p.noise_std, size=c0.shape)
-            new = self.positions + disp
-            blocked, c1 = self._blocked(self.positions, new, c0)
-            pos = np.where(blocked[:, None], self.positions, new)  # a move into a wall is skipped
-            cells = np.where(blocked[:, None], c0, c1)
-            inside = self.grid.contains(cells)
-            keep = inside.copy()
-            keep[inside] = ~self.outlet[cells[inside, 0], cells[inside, 1]]  # outlets and the border remove
-            self.n_removed += int((~keep).sum())
-            self.positions, self.births, self._cells = pos[keep], self.births[keep], cells[keep]
+            self.release(math.floor((self._step + 1) * p.dt * p.release_rate + 1e-9) - self.n_released)
+            vel = self.wind.velocities[self.wind.index(self.time)].reshape(-1, 2)
+            x0, c0 = self.positions, self._cells
+            disp = vel.take(c0[:, 0] * w + c0[:, 1], axis=0) * p.dt
+            disp += self._rng.normal(0.0, p.noise_std, size=c0.shape)
+            pos = x0 + disp
+            blocked, cells = self._blocked(x0, pos, c0)
+            i = blocked.nonzero()[0]
+            if i.size:  # a move into a wall is skipped
+                pos[i] = x0[i]
+                cells[i] = c0[i]
+            # outlets and the border remove: a table of the cells that keep a filament, with a removing border
+            r = np.minimum(np.maximum(cells[:, 0] + 1, 0), h + 1)
+            q = np.minimum(np.maximum(cells[:, 1] + 1, 0), w + 1)
+            keep = stays.take(r * (w + 2) + q)
+            kept = int(np.count_nonzero(keep))
+            if kept < keep.size:
+                self.n_removed += keep.size - kept
+                pos, cells = pos.compress(keep, axis=0), cells.compress(keep, axis=0)
+                self.births = self.births.compress(keep)
+            self.positions, self._cells = pos, cells
             self._step += 1
             self.time = self._step * p.dt
 
