@@ -4,10 +4,14 @@ The horizontal field of view is the core :func:`psgsl_pgm.field_of_view` on the 
 does not hide anything in 2-D): the same light-tight line of sight as the gas model's. Only free cells are observed (walls are not part of any object class). With
 voxel layers, a voxel of a visible column is in view when its centre lies within the camera's vertical
 half-angle.
+
+What a camera sees from a pose depends on the walls only, so the visible cells are kept per grid (for as long
+as the grid lives) and pose: a robot that looks again from the same pose does not recompute its view.
 """
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +22,9 @@ from ._classes import OTHER, match_names
 from ._detector import DetectorModel
 
 __all__ = ["Camera", "Frame", "take_frame"]
+
+_VIEWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # GridMap -> {(camera, pose): flat cells}
+_VIEWS_PER_GRID = 1024  # poses kept per grid (the oldest goes first)
 
 
 @dataclass(frozen=True)
@@ -56,9 +63,28 @@ class Camera:
 
     def visible(self, grid, pose) -> np.ndarray:
         """(H, W) bool: free cells in view from ``pose`` = (x, y, heading)."""
-        seen = field_of_view(grid.occupancy, pose, max_range=self.max_range, half_angle=self.half_angle,
-                             min_range=self.min_range, resolution=grid.resolution, origin=grid.origin)
-        return seen & grid.free
+        h, w = grid.shape
+        seen = np.zeros(h * w, dtype=bool)
+        seen[self._visible_flat(grid, pose)] = True
+        return seen.reshape(h, w)
+
+    def _visible_flat(self, grid, pose) -> np.ndarray:
+        """Row-major flat indices of the free cells in view from ``pose`` (read-only; kept per grid and pose)."""
+        pose = np.asarray(pose, dtype=np.float64)
+        key = (self, pose.shape, pose.tobytes())  # the pose bit for bit
+        views = _VIEWS.get(grid)
+        if views is None:
+            views = _VIEWS[grid] = {}
+        flat = views.get(key)
+        if flat is None:
+            seen = field_of_view(grid.occupancy, pose, max_range=self.max_range, half_angle=self.half_angle,
+                                 min_range=self.min_range, resolution=grid.resolution, origin=grid.origin)
+            flat = np.flatnonzero(seen & grid.free)
+            flat.flags.writeable = False
+            if len(views) >= _VIEWS_PER_GRID:
+                views.pop(next(iter(views)), None)  # the oldest pose
+            views[key] = flat
+        return flat
 
     def voxels_in_view(self, distance, layer_centres) -> np.ndarray:
         """(n, L) bool: voxels at horizontal ``distance`` (n,) and heights ``layer_centres`` (L,) in view."""
@@ -134,8 +160,7 @@ def take_frame(house, pose, *, camera: Camera, detector: DetectorModel, rng, mod
         raise ValueError(f"model classes {model.classes} differ from the detector's {detector.classes}")
     pose = np.asarray(pose, dtype=np.float64)
     g = house.grid
-    vis = camera.visible(g, pose)
-    cells = np.argwhere(vis)
+    cells = np.stack(np.divmod(camera._visible_flat(g, pose), g.shape[1]), axis=-1)  # np.argwhere of the view
     dist = np.linalg.norm(g.cell_to_world(cells) - pose[:2], axis=-1)
     truth = _true_classes(house, detector.classes, layer_edges)
     layers = None
