@@ -317,19 +317,23 @@ class FilamentModel:
         pts = np.asarray(points, dtype=np.float64)
         single = pts.ndim == 1
         pts = pts.reshape(-1, 2)
-        rc = self.grid.world_to_cell(pts)
-        if not self.grid.contains(rc).all():
+        rc = self._cells_of(pts)
+        h, w = self.grid.shape
+        if not ((rc[:, 0] >= 0) & (rc[:, 0] < h) & (rc[:, 1] >= 0) & (rc[:, 1] < w)).all():
             raise ValueError(f"points must lie inside the map {self.grid.extent}")
         p = self.params
         s2 = p.sigma0**2 + p.gamma * (self.time - self.births)  # σ² = σ0² + γ (t − t_b)
         amp = p.ppm_center * (p.sigma0**2 / s2) ** 1.5  # ppm_centre (σ0/σ)³
+        reach2 = p.cutoff**2 * s2
+        fx, fy = self.positions[:, 0], self.positions[:, 1]
         out = np.zeros(len(pts))
-        for i, (x, rcq) in enumerate(zip(pts, rc)):
-            d2 = ((self.positions - x) ** 2).sum(axis=1)
-            near = np.flatnonzero(d2 < p.cutoff**2 * s2)
+        for i, ((x, y), rcq) in enumerate(zip(pts.tolist(), rc)):
+            dx, dy = fx - x, fy - y
+            d2 = dx * dx + dy * dy  # |x − x_f|²
+            near = (d2 < reach2).nonzero()[0]
             if near.size == 0:
                 continue
-            near = near[self._los.clear_from(rcq, self._cells[near])]
+            near = near[self._los.clear_from(rcq, self._cells.take(near, axis=0))]
             out[i] = np.sum(amp[near] * np.exp(-d2[near] / (2 * s2[near])))
         return out[0] if single else out
 
