@@ -211,14 +211,12 @@ class FilamentModel:
         blocked = self._walls_at(r1, q1)
         i = ((r1 != r0) & (q1 != q0)).nonzero()[0]  # diagonal moves
         if i.size:
-            res, (ox, oy) = self.grid.resolution, self.grid.origin
-            a, b = p0.take(i, axis=0), p1.take(i, axis=0)
-            ri0, qi0, ri1, qi1 = r0[i], q0[i], r1[i], q1[i]
-            xb = ox + np.maximum(qi0, qi1) * res  # the column boundary crossed
-            yb = oy + np.maximum(ri0, ri1) * res
-            tx = (xb - a[:, 0]) / (b[:, 0] - a[:, 0])
-            ty = (yb - a[:, 1]) / (b[:, 1] - a[:, 1])
-            blocked[i] |= ((tx <= ty) & self._walls_at(ri0, qi1)) | ((ty <= tx) & self._walls_at(ri1, qi0))
+            a, b, ci0, ci1 = p0.take(i, axis=0), p1.take(i, axis=0), c0.take(i, axis=0), c1.take(i, axis=0)
+            corner = self._origin + np.maximum(ci0, ci1)[:, ::-1] * self.grid.resolution  # boundaries crossed
+            t = (corner - a) / (b - a)  # (t_x, t_y)
+            tx, ty = t[:, 0], t[:, 1]
+            blocked[i] |= (((tx <= ty) & self._walls_at(ci0[:, 0], ci1[:, 1]))
+                           | ((ty <= tx) & self._walls_at(ci1[:, 0], ci0[:, 1])))
         return blocked
 
     def _blocked(self, p0, p1, c0) -> tuple[np.ndarray, np.ndarray]:
