@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.optimize import brentq
 
@@ -87,29 +89,55 @@ def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> floa
     c_hit, c_miss = c[g & (c > 0)], c[~g]
     if c_hit.size == 0:
         raise ValueError("hits: no hit where the model predicts gas from this source (predicted > 0): the maximum-likelihood encounter scale is 0")
-    miss_sum = float(c_miss.sum())
+    with np.errstate(over="ignore"):
+        miss_sum = float(c_miss.sum())
     if not miss_sum > 0:
         raise ValueError("hits: no miss where the model predicts gas from this source (predicted > 0): the maximum-likelihood encounter scale is ∞")
+    root = _log_scale_root(c_hit, miss_sum, eps) if math.isfinite(miss_sum) else "rescale"
+    if not isinstance(root, str):
+        return float(np.exp(root))
+    # out of the bracket e^±700, or sums beyond float64: the same fit on predicted / its largest hit (κ c is
+    # what the likelihood sees), the scale divided back
+    scale = float(c_hit.max())
+    with np.errstate(over="ignore"):
+        root = _log_scale_root(c_hit / scale, float(np.sum(c_miss / scale)), eps)
+    if root == "zero":
+        raise ValueError("predicted, hits and false_hit_rate: false hits alone explain the hits (the maximum-likelihood "
+                         "encounter scale is 0)")
+    with np.errstate(over="ignore"):
+        kappa = np.exp(root) / scale if not isinstance(root, str) else math.inf
+    if not (math.isfinite(kappa) and kappa > 0):
+        raise ValueError(f"predicted: no float64 encounter scale explains these readings (predicted values where gas "
+                         f"was hit are at most {scale:.3g}, where it was not {float(c_miss.max(initial=0.0)):.3g}); "
+                         "give predicted in other units")
+    return float(kappa)
+
+
+def _log_scale_root(c_hit: np.ndarray, miss_sum: float, eps: float):
+    """log κ where d log L / dκ = 0, bracketed within [-705, 705] and found with Brent's method; ``"zero"`` where
+    the score is still ≤ 0 at κ = e^-705 (the maximum is at 0 or below the bracket), ``"large"`` where it is still
+    ≥ 0 at κ = e^705."""
 
     def score(log_kappa: float) -> float:
         kappa = np.exp(log_kappa)
-        e = np.exp(-kappa * c_hit)
-        p_hit = eps + (1.0 - eps) * -np.expm1(-kappa * c_hit)  # P(hit | s)
-        return float(np.sum((1.0 - eps) * c_hit * e / p_hit) - miss_sum)  # d log L / dκ
+        with np.errstate(over="ignore"):  # κ c beyond float64: e = 0 and P(hit) = 1, the right limits
+            x = -kappa * c_hit
+        e = np.exp(x)
+        p_hit = eps + (1.0 - eps) * -np.expm1(x)  # P(hit | s)
+        # (1 − ε) c e / P(hit), whose limit where ε = 0 and κ c underflows to 0 is 1 / κ
+        terms = np.divide((1.0 - eps) * c_hit * e, p_hit, out=np.full(c_hit.shape, 1.0 / kappa), where=p_hit > 0)
+        return float(np.sum(terms) - miss_sum)  # d log L / dκ
 
     lo, hi = -5.0, 5.0
     while score(lo) <= 0:
         lo -= 10.0
         if lo < -700:
-            raise ValueError("predicted, hits and false_hit_rate: false hits alone explain the hits (the maximum-likelihood "
-                             "encounter scale is 0)")
+            return "zero"
     while score(hi) >= 0:
         hi += 10.0
         if hi > 700:
-            raise ValueError(f"predicted: the values where gas was hit (at most {c_hit.max():.3g}) are too small for "
-                             f"any encounter scale up to {np.exp(hi - 10.0):.3g} to explain the hits; give predicted "
-                             "in larger units")
-    return float(np.exp(brentq(score, lo, hi, xtol=1e-13, rtol=1e-13)))
+            return "large"
+    return brentq(score, lo, hi, xtol=1e-13, rtol=1e-13)
 
 
 def _hits(hits, shape: tuple, like: str) -> np.ndarray:

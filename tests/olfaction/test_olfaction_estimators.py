@@ -290,9 +290,16 @@ def test_fit_encounter_scale_recovers_kappa_from_model_draws():
         fit_encounter_scale(model, [[1.0, 1.0], [2.0]], hits[:2], src)
 
 
-def test_encounter_scale_mle_names_predicted_when_no_scale_fits():
-    """Predictions so small that no float64 encounter scale turns them into hits: the message names predicted."""
-    with pytest.raises(ValueError, match=r"predicted: the values where gas was hit \(at most 2.23e-309\) are too small"):
+def test_encounter_scale_mle_at_the_ends_of_float64():
+    """κ c is what the likelihood sees: predictions near 1e308 (whose sums overflow) or 1e-300 give the fit of the
+    rescaled predictions, scaled back; predictions no float64 κ can scale up are refused naming predicted."""
+    c = np.array([0.9, 1.0, 0.7, 0.95, 0.8])
+    hits = np.array([False, True, True, False, True])
+    base = encounter_scale_mle(c, hits, false_hit_rate=0.01)
+    for scale in (1.7e308, 1e-300):  # the misses sum to 3.1e308; κ ≈ 1e300
+        assert encounter_scale_mle(c * scale, hits, false_hit_rate=0.01) == pytest.approx(base / scale, rel=1e-9)
+    with pytest.raises(ValueError, match=r"predicted: no float64 encounter scale explains these readings \(predicted "
+                                         r"values where gas was hit are at most 2.23e-309"):
         encounter_scale_mle(np.full(4, 2.2250738585e-309), [False, True, True, False], false_hit_rate=0.01)
 
 
