@@ -187,7 +187,8 @@ class SemanticGSLProblem:
         if cells_idx.ndim != 1 or not np.issubdtype(cells_idx.dtype, np.integer):
             raise TypeError(f"observation_cells must be a 1-D integer array, got {cells_idx.dtype} {cells_idx.shape}")
         if np.any((cells_idx < 0) | (cells_idx >= n)):
-            raise ValueError(f"observation_cells must index the {n} cells (cells gives n = {n}), got values outside [0, {n})")
+            raise ValueError(f"observation_cells must index the {n} cells (cells gives n = {n}), got values outside "
+                             f"[0, {n})")
         obs = np.zeros((0, k)) if observation_likelihoods is None else _array(
             observation_likelihoods, "observation_likelihoods", 2
         )
@@ -215,11 +216,13 @@ class SemanticGSLProblem:
 
         g = np.ones(n) if olfactory_likelihood is None else _array(olfactory_likelihood, "olfactory_likelihood", 1)
         if g.shape != (n,):
-            raise ValueError(f"olfactory_likelihood must have shape ({n},), one entry per cell (cells gives n = {n}), got {g.shape}")
+            raise ValueError(f"olfactory_likelihood must have shape ({n},), one entry per cell (cells gives n = {n}), "
+                             f"got {g.shape}")
         self.olfactory_likelihood = g  # p(g | S = c), (n,)
         prior = np.full(n, 1.0 / n) if source_prior is None else _array(source_prior, "source_prior", 1, keep_float32=True)
         if prior.shape != (n,):
-            raise ValueError(f"source_prior must have shape ({n},), one entry per cell (cells gives n = {n}), got {prior.shape}")
+            raise ValueError(f"source_prior must have shape ({n},), one entry per cell (cells gives n = {n}), got "
+                             f"{prior.shape}")
         self.source_prior = _distribution(prior, "source_prior")  # π_s, (n,)
         gp = np.full(m, 1.0 / m) if gas_prior is None else _array(gas_prior, "gas_prior", 1, keep_float32=True)
         if gp.shape != (m,):
