@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ._coco import canonical_class
+from ._npyfile import READ_ERRORS, load_npy
 from ._validate import check_distribution
 
 __all__ = ["read_class_beliefs", "voxeland_class_beliefs"]
@@ -74,16 +75,19 @@ def read_class_beliefs(path, classes, *, grid=None, class_prior=None) -> np.ndar
             raise ValueError(f"{p}: not a readable JSON file ({exc})") from None
         return voxeland_class_beliefs(data, classes, grid=grid, class_prior=class_prior, where=str(p))
     try:
-        loaded = np.load(p, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as exc:
-        raise ValueError(f"{p}: not a .npy/.npz array file ({exc})") from None
+        loaded = load_npy(p, str(p))
+    except READ_ERRORS as exc:
+        raise ValueError(f"{p}: not a .npy/.npz array file ({' '.join(str(exc).split())})") from None
     if suffix == ".npz" or not isinstance(loaded, np.ndarray):
         with loaded as z:
             missing = [k for k in ("probs", "classes") if k not in z.files]
             if missing:
                 raise ValueError(f"{p}: an .npz of class beliefs needs arrays 'probs' and 'classes'; missing {missing}"
                                  f" (has {z.files})")
-            probs, names = z["probs"], z["classes"]
+            try:
+                probs, names = z["probs"], z["classes"]
+            except READ_ERRORS as exc:
+                raise ValueError(f"{p}: not a readable .npz array file ({' '.join(str(exc).split())})") from None
         if names.ndim != 1 or names.dtype.kind not in "US":
             raise ValueError(f"{p}: array 'classes' must be a 1-D array of names, got {names.dtype} {names.shape}")
         return _by_name(p, _real(p, probs), [str(n) for n in names], classes)

@@ -125,12 +125,14 @@ _DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 def _load_array(path, name):
     import numpy as np
 
+    from ._npyfile import READ_ERRORS, load_npy
+
     try:
-        arr = np.load(path, allow_pickle=False)
+        arr = load_npy(path, name)
     except FileNotFoundError:
         raise _UsageError(f"{name}: no such file {path!r}") from None
-    except (OSError, ValueError, EOFError) as exc:
-        raise _UsageError(f"{name}: {path!r} is not a .npy array ({exc})") from None
+    except READ_ERRORS as exc:
+        raise _UsageError(f"{name}: {path!r} is not a .npy array ({' '.join(str(exc).split())})") from None
     if not isinstance(arr, np.ndarray):
         raise _UsageError(f"{name}: expected one array in a .npy file, got an archive in {path!r}")
     if arr.dtype.kind not in "fiu":  # the type contract: real numbers only (no bool, complex, text, dates)
@@ -169,7 +171,8 @@ def _estimate(args) -> int:
     voxels = class_probs.ndim == 4 and olfactory.shape == class_probs.shape[:2]  # (H, W, L, k) voxels, (H, W) cells
     cells = class_probs.shape[:2] if voxels else class_probs.shape[:-1]
     if olfactory.shape != cells:
-        raise _UsageError(f"--olfactory must have the map's shape {cells}, got {olfactory.shape}")
+        raise _UsageError(f"--olfactory must have the map's shape {cells} (the cells of --class-probs), got "
+                          f"{olfactory.shape}")
     check_distribution(as_float_array(class_probs, "--class-probs"), "--class-probs (p(o_c | z_c) per cell)")
     olf = check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
     check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g), over all cells)", olf.dtype)

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import json
-import zipfile
-import zlib
 from pathlib import Path
 
 import numpy as np
 
 from .._grid_runner import atomic_write
+from .._npyfile import READ_ERRORS, load_npy
 from ._config import source_label
 from ._run import RunResult
 
@@ -54,11 +53,11 @@ def load_run(path) -> RunResult:
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such run file")
     try:
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:  # our handle: closed even on a bad zip
+        with load_npy(path, str(path)) as z:
             steps = z["snapshot_steps"]
             snaps = {int(s): z["snapshots"][i] for i, s in enumerate(steps)}
             return RunResult(str(z["source"]), int(z["seed"]), str(z["estimator"]), z["source_xy"], z["time"],
                              z["position"], z["hit"], z["error"], z["spread"], snaps, json.loads(str(z["config"])))
-    except (OSError, KeyError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+    except (*READ_ERRORS, KeyError, TypeError) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise ValueError(f"{path} is not a run file written by psgsl ({reason}); delete it to recompute the run") from None

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .._grid_runner import atomic_write
+from .._npyfile import READ_ERRORS, load_npy
 from ..experiment._config import source_label
 from ._loop import SearchRun
 
@@ -41,11 +42,11 @@ def load_search_run(path) -> SearchRun:
     """Read a run written by :func:`save_search_run` (ValueError naming the file if it is not one)."""
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with load_npy(path, str(path)) as z:
             arrays = {k: z[k] for k in _ARRAYS}
             return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
                              str(z["estimator"]), arrays.pop("source_xy"), bool(z["found"]),
                              float(z["time_to_find"]), float(z["geodesic"]), float(z["driven"]),
                              config=json.loads(str(z["config"])), **arrays)
-    except (OSError, KeyError, ValueError, EOFError) as exc:
-        raise ValueError(f"{path} is not a search run file written by psgsl ({exc})") from None
+    except (*READ_ERRORS, KeyError, TypeError) as exc:
+        raise ValueError(f"{path} is not a search run file written by psgsl ({' '.join(str(exc).split())})") from None

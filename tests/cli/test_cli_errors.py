@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 
@@ -71,6 +72,19 @@ def test_estimate_writes_exactly_the_out_path_and_prints_it(tmp_path, estimate_i
     assert np.load(out).shape == (3, 4)
     assert f"-> {out};" in capsys.readouterr().out
     assert not [p for p in os.listdir(tmp_path) if p.endswith(".part") or p.startswith(".psgsl")]
+
+
+@pytest.mark.parametrize("spoil, message", [
+    (lambda d, k: np.save(d / "p.npy", np.full(k, 1 / k)), r"--olfactory must have the map's shape \(\) \(the cells of "
+                                                          r"--class-probs\), got \(3, 4\)"),
+    (lambda d, k: (d / "p.npy").write_bytes((d / "p.npy").read_bytes()[:40] + b"\x00" * 40 + b"["),
+     r"--class-probs: '.*p\.npy' is not a \.npy array"),  # a header numpy's parser fails on with a TokenError
+])
+def test_estimate_names_the_file_of_a_mismatch_or_a_garbled_header(tmp_path, estimate_inputs, capsys, spoil, message):
+    spoil(tmp_path, len(kitchen_ontology().classes))
+    assert cli.main(estimate_inputs + ["--out", str(tmp_path / "post.npy")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search(message, err[0]), err
 
 
 @pytest.mark.parametrize(
