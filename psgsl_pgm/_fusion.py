@@ -69,18 +69,12 @@ def fuse(*posteriors, prior=None):
         check_nonnegative(arrays[0], "posteriors[0]")  # names the empty input
 
     # Linear space: p_c = Π_j p(s_c|e_j), one pass per input that also checks it (sign, finiteness, sum).
-    # Σ_c p_c over the cells not marked comes with the last pass.
     prod = np.empty(flat[0].size)
     if len(flat) == 1:
-        st, linear_total = fuse_step(prod, flat[0], True)
-        stats = [st]
+        stats = [fuse_step(prod, flat[0], True)]
     else:
-        st_a, st_b, linear_total = fuse_pair(prod, flat[0], flat[1])
-        stats = [st_a, st_b]
-        for a in flat[2:]:
-            st, linear_total = fuse_step(prod, a, False)
-            stats.append(st)
-    marked = int(sum(st[2] for st in stats[1:])) if len(stats) > 1 else 0
+        stats = list(fuse_pair(prod, flat[0], flat[1]))
+        stats += [fuse_step(prod, a, False) for a in flat[2:]]
     for j, (a, st) in enumerate(zip(arrays, stats)):
         if st[0] > 0 or not np.isfinite(st[1]):
             check_nonnegative(a, f"posteriors[{j}]")  # locates and names the bad entry
@@ -96,9 +90,7 @@ def fuse(*posteriors, prior=None):
         check_nonnegative(pr, "prior")
         check_sums(pr.sum(), "prior (over all cells)", pr.dtype)
         pr = np.ascontiguousarray(pr).reshape(-1)
-    zero_support = 0
-    if pr.size:
-        linear_total, marked, zero_support = fuse_finish(prod, pr, extra)  # ÷ p(s)^(m-1), Σ_c
+    linear_total, marked, zero_support = fuse_finish(prod, pr, extra)  # ÷ p(s)^(m-1), Σ_c
     if zero_support:
         support = np.logical_and.reduce([a > 0 for a in flat])
         cell = np.unravel_index(np.flatnonzero(support & (pr == 0))[0], shape)

@@ -53,9 +53,6 @@ PARALLEL_MIN = 1 << 23  # elements read below which one thread is used: ~5 ms of
 
 _FASTMATH = {"reassoc", "contract", "nsz", "arcp"}  # never nnan / ninf: NaN and inf must propagate
 _JIT = dict(nogil=True, cache=True, fastmath=_FASTMATH, error_model="numpy")
-# The fusion passes return a sum that the result is divided by: without re-association it is added in cell
-# order, so it does not depend on how the vectoriser splits the loop (which varies with the arrays' alignment).
-_JIT_ORDERED = dict(nogil=True, cache=True, error_model="numpy")
 _THREADS = max(1, min(8, os.cpu_count() or 1))
 _POOL: ThreadPoolExecutor | None = None
 
@@ -323,10 +320,9 @@ def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy
                 out[r] = entropy * s_x + alog * s_d + a * s_gap - s_log
 
 
-@nb.njit(**_JIT_ORDERED)
+@nb.njit(**_JIT)
 def _fuse_pair(p, a, b, part, c0, c1):
-    """p = a · b element-wise (float64), with the checks of both inputs and Σ p over the cells not marked;
-    see :func:`fuse_step`."""
+    """p = a · b element-wise (float64), with the checks of both inputs; see :func:`fuse_step`."""
     n = p.shape[0]
     for c in range(c0, c1):
         neg_a = 0
@@ -334,7 +330,6 @@ def _fuse_pair(p, a, b, part, c0, c1):
         sa = 0.0
         sb = 0.0
         unsafe = 0
-        total = 0.0
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
             x = np.float64(a[i])
             y = np.float64(b[i])
@@ -346,50 +341,40 @@ def _fuse_pair(p, a, b, part, c0, c1):
             bad = (z < TINY) & (x > 0) & (y > 0)
             unsafe += bad
             p[i] = -1.0 if bad else z
-            if not bad and z >= 0.0:
-                total += z
         part[c, 0] = neg_a
         part[c, 1] = sa
         part[c, 2] = neg_b
         part[c, 3] = sb
         part[c, 4] = unsafe
-        part[c, 5] = total
 
 
-@nb.njit(**_JIT_ORDERED)
+@nb.njit(**_JIT)
 def _fuse_step(p, a, first, part, c0, c1):
     """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a).
 
     A cell whose product of positive factors falls below :data:`TINY` is marked −1 (it is recomputed in log
-    space by the caller) and stays marked. Returns [negative entries of a, Σ a, newly marked cells, Σ p over
-    the cells not marked after this step].
+    space by the caller) and stays marked. Returns [negative entries of a, Σ a, newly marked cells].
     """
     n = p.shape[0]
     for c in range(c0, c1):
         neg = 0
         s = 0.0
         unsafe = 0
-        total = 0.0
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
             x = np.float64(a[i])
             neg += x < 0
             s += x
             if first:
-                z = x
+                p[i] = x
             else:
                 pc = p[i]
                 z = pc * x
                 bad = (z < TINY) & (pc > 0) & (x > 0)
                 unsafe += bad
-                if bad | (pc < 0):
-                    z = -1.0
-            p[i] = z
-            if z >= 0.0:
-                total += z
+                p[i] = -1.0 if (bad | (pc < 0)) else z
         part[c, 0] = neg
         part[c, 1] = s
         part[c, 2] = unsafe
-        part[c, 3] = total
 
 
 @nb.njit(**_JIT)
@@ -510,28 +495,27 @@ def gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy,
 
 
 def fuse_pair(p, a, b):
-    """p = a · b element-wise (float64), checking both inputs.
+    """p = a · b element-wise (float64), checking both inputs; returns ([neg a, Σ a, marked], [neg b, Σ b, marked]).
 
-    Returns ([neg a, Σ a, marked], [neg b, Σ b, marked], Σ p over the cells not marked). A cell whose product
-    of positive factors falls below :data:`TINY` is marked −1 (the caller recomputes it in log space).
+    A cell whose product of positive factors falls below :data:`TINY` is marked −1 (the caller recomputes it
+    in log space).
     """
     n = p.shape[0]
-    part = np.zeros((n_chunks(n), 6))
+    part = np.zeros((n_chunks(n), 5))
     run(_fuse_pair, n, 3 * n, p, a, b, part)
     t = part.sum(axis=0)
-    return t[[0, 1, 4]], t[[2, 3, 4]], float(t[5])
+    return t[[0, 1, 4]], t[[2, 3, 4]]
 
 
 def fuse_step(p, a, first: bool):
     """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a); marks as :func:`fuse_pair`.
 
-    Returns ([negative entries of a, Σ a, newly marked cells], Σ p over the cells not marked).
+    Returns [negative entries of a, Σ a, newly marked cells].
     """
     n = p.shape[0]
-    part = np.zeros((n_chunks(n), 4))
+    part = np.zeros((n_chunks(n), 3))
     run(_fuse_step, n, 3 * n, p, a, first, part)
-    t = part.sum(axis=0)
-    return t[:3], float(t[3])
+    return part.sum(axis=0)
 
 
 def fuse_finish(p, prior, extra: int):
