@@ -64,26 +64,21 @@ def _screen(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range
 
 
 @nb.njit(nogil=True, cache=True, error_model="numpy")
-def _cone_mask(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, out):
-    code = np.empty(rows.shape[0], np.uint8)
+def _decide(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code):
+    """code[j] = 1 inside, 0 outside: the screening pass, then :func:`_exact` for the cells too close to call."""
     _screen(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code)
     for j in range(rows.shape[0]):
         if code[j] == 2:
-            out[j] = _exact(rows[j], cols[j], col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range)
-        else:
-            out[j] = code[j] == 1
+            code[j] = _exact(rows[j], cols[j], col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range)
 
 
 @nb.njit(nogil=True, cache=True, error_model="numpy")
 def _cone_values(rows, cols, values, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, out):
     code = np.empty(rows.shape[0], np.uint8)
-    _screen(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code)
+    _decide(rows, cols, col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range, code)
     n = 0
     for j in range(rows.shape[0]):
-        k = code[j]
-        if k == 2:
-            k = _exact(rows[j], cols[j], col0, row0, res, cos_h, sin_h, cos_half, full, min_range, max_range)
-        if k:
+        if code[j]:
             out[n] = values[rows[j], cols[j]]
             n += 1
     return n
@@ -110,9 +105,9 @@ def cone_mask(rows, cols, *, col0, row0, res, heading, half_angle, min_range, ma
     inside : (m,) ndarray of bool
     """
     rows, cols = np.asarray(rows), np.asarray(cols)
-    out = np.empty(rows.shape[0], dtype=np.bool_)
-    _cone_mask(rows, cols, *_camera_args(col0, row0, res, heading, half_angle, min_range, max_range), out)
-    return out
+    code = np.empty(rows.shape[0], dtype=np.uint8)
+    _decide(rows, cols, *_camera_args(col0, row0, res, heading, half_angle, min_range, max_range), code)
+    return code.view(np.bool_)
 
 
 def cone_values(rows, cols, values, *, col0, row0, res, heading, half_angle, min_range, max_range):
