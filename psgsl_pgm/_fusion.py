@@ -56,7 +56,7 @@ def fuse(*posteriors, prior=None):
         raise TypeError("fuse needs at least one posterior, got none")
     if any(is_dask_array(p) for p in (*posteriors, prior)):  # chunked over cells, lazy: psgsl_pgm._dask_arrays
         return _dask_arrays.fuse_dask(*posteriors, prior=prior)
-    from ._kernel import fuse_finish, fuse_pair, fuse_step  # compiled on first use (numba)
+    from ._kernel import fuse_finish, fuse_pair, fuse_step, fuse_sum, fuse_write  # compiled on first use
 
     arrays = [as_float_array(p, f"posteriors[{j}]", min_ndim=1) for j, p in enumerate(posteriors)]
     shape = arrays[0].shape
@@ -68,18 +68,6 @@ def fuse(*posteriors, prior=None):
     if flat[0].size == 0:
         check_nonnegative(arrays[0], "posteriors[0]")  # names the empty input
 
-    # Linear space: p_c = Π_j p(s_c|e_j), one pass per input that also checks it (sign, finiteness, sum).
-    prod = np.empty(flat[0].size)
-    if len(flat) == 1:
-        stats = [fuse_step(prod, flat[0], True)]
-    else:
-        stats = list(fuse_pair(prod, flat[0], flat[1]))
-        stats += [fuse_step(prod, a, False) for a in flat[2:]]
-    for j, (a, st) in enumerate(zip(arrays, stats)):
-        if st[0] > 0 or not np.isfinite(st[1]):
-            check_nonnegative(a, f"posteriors[{j}]")  # locates and names the bad entry
-        check_sums(st[1], f"posteriors[{j}] (over all cells)", a.dtype)
-
     extra = len(arrays) - 1
     if prior is None:
         pr = np.empty(0)
@@ -90,11 +78,30 @@ def fuse(*posteriors, prior=None):
         check_nonnegative(pr, "prior")
         check_sums(pr.sum(), "prior (over all cells)", pr.dtype)
         pr = np.ascontiguousarray(pr).reshape(-1)
+
+    if len(flat) == 2:
+        # eq. combined-conditionals in two passes and no temporary: T = Σ_c p(s_c|g) p(s_c|z) / p(s_c)
+        # (and the checks of both inputs), then p_c / T written once, in the output's dtype
+        st_a, st_b, unsafe, total, zero_support = fuse_sum(flat[0], flat[1], pr, extra)
+        _check_inputs(arrays, [st_a, st_b])
+        _check_support(zero_support, flat, pr, shape)
+        if not unsafe:
+            if not total > 0:
+                raise ValueError(_conflict_message(arrays))
+            out = np.empty(flat[0].size, out_dtype)
+            fuse_write(out, flat[0], flat[1], pr, extra, total)
+            return out.reshape(shape)
+
+    # Linear space: p_c = Π_j p(s_c|e_j), one pass per input that also checks it (sign, finiteness, sum).
+    prod = np.empty(flat[0].size)
+    if len(flat) == 1:
+        stats = [fuse_step(prod, flat[0], True)]
+    else:
+        stats = list(fuse_pair(prod, flat[0], flat[1]))
+        stats += [fuse_step(prod, a, False) for a in flat[2:]]
+    _check_inputs(arrays, stats)
     linear_total, marked, zero_support = fuse_finish(prod, pr, extra)  # ÷ p(s)^(m-1), Σ_c
-    if zero_support:
-        support = np.logical_and.reduce([a > 0 for a in flat])
-        cell = np.unravel_index(np.flatnonzero(support & (pr == 0))[0], shape)
-        raise ValueError(f"prior is zero at cell {tuple(int(i) for i in cell)} where every posterior is positive")
+    _check_support(zero_support, flat, pr, shape)
     if marked:
         return _with_log_space_cells(prod, flat, pr, extra, linear_total, arrays).astype(out_dtype, copy=False)
     if not linear_total > 0:
@@ -102,6 +109,22 @@ def fuse(*posteriors, prior=None):
     out = np.divide(prod, linear_total, out=prod if out_dtype == np.float64 else np.empty(prod.size, out_dtype),
                     casting="same_kind")
     return out.reshape(shape)
+
+
+def _check_inputs(arrays, stats) -> None:
+    """Each input non-negative, finite and summing to 1, from the kernel's [negatives, Σ] of it."""
+    for j, (a, st) in enumerate(zip(arrays, stats)):
+        if st[0] > 0 or not np.isfinite(st[1]):
+            check_nonnegative(a, f"posteriors[{j}]")  # locates and names the bad entry
+        check_sums(st[1], f"posteriors[{j}] (over all cells)", a.dtype)
+
+
+def _check_support(zero_support, flat, pr, shape) -> None:
+    """The prior must be positive wherever every posterior is."""
+    if zero_support:
+        support = np.logical_and.reduce([a > 0 for a in flat])
+        cell = np.unravel_index(np.flatnonzero(support & (pr == 0))[0], shape)
+        raise ValueError(f"prior is zero at cell {tuple(int(i) for i in cell)} where every posterior is positive")
 
 
 def _with_log_space_cells(prod, flat, pr, extra, linear_total, arrays):

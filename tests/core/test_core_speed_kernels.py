@@ -194,18 +194,60 @@ def test_central_moments_match_a_direct_float64_computation():
     assert stats[4] == pytest.approx(f @ w, rel=1e-14)
 
 
-@pytest.mark.parametrize("marked", [False, True])
-def test_fusion_does_not_depend_on_the_alignment_of_its_inputs(marked):
-    # the normaliser is summed in cell order, so a copy of the same values at another address fuses the same
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("case", ["plain", "marked", "prior", "three"])
+def test_fusion_does_not_depend_on_the_alignment_of_its_inputs(case, dtype):
+    # a copy of the same values at another address fuses to the same bits (the vectorised normaliser has no
+    # alignment-dependent peel), on one thread and across the threads of a parallel pass
     rng = np.random.default_rng(11)
-    n = 5000
-    a, b = rng.dirichlet(np.ones(n)), rng.dirichlet(np.ones(n))
-    if marked:  # products below 2^-1000: recomputed in log space
-        a[:3] = 1e-300
-        a /= a.sum()
-    want = fuse(a, b)
-    for offset in range(1, 8):
-        buf = np.empty(n + 8)
-        shifted = buf[offset:offset + n]
-        shifted[:] = a
-        np.testing.assert_array_equal(fuse(shifted, b), want)
+    for n in (5000, 600_000):
+        a, b, c = (rng.dirichlet(np.ones(n)).astype(dtype) for _ in range(3))
+        if case == "marked":  # products below 2^-1000: recomputed in log space
+            a = a.astype(np.float64)
+            a[:3] = 1e-300
+            a /= a.sum()
+        prior = rng.dirichlet(np.ones(n)) if case == "prior" else None
+        rest = (c,) if case == "three" else ()
+        want = fuse(a, b, *rest, prior=prior)
+        for offset in (1, 3, 7):
+            shifted = []
+            for x in (a, b):
+                buf = np.empty(n + 8, x.dtype)
+                buf[offset:offset + n] = x
+                shifted.append(buf[offset:offset + n])
+            np.testing.assert_array_equal(fuse(shifted[0], b, *rest, prior=prior), want)
+            np.testing.assert_array_equal(fuse(a, shifted[1], *rest, prior=prior), want)
+            np.testing.assert_array_equal(fuse(*shifted, *rest, prior=prior), want)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_the_weight_kernel_sees_every_row_of_its_four_row_blocks_and_of_the_tail(dtype):
+    # rows are reduced four at a time, the last n mod 4 one by one: a weight, a negative entry, a bad row sum
+    # or mass on a zero-prior class is found in every position of either
+    rng = np.random.default_rng(12)
+    k = 7
+    rho = rng.random(k) * 3
+    zero = np.zeros(k)
+    zero[2] = 1.0
+    for n in (1, 2, 3, 4, 5, 7, 8, 9):
+        q = rng.dirichlet(np.ones(k), size=n).astype(dtype)
+        q[:, 2] = 0.0
+        q /= q.sum(axis=1, keepdims=True)
+        w, stats = _kernel.belief_weights(q, rho, zero)
+        np.testing.assert_allclose(w, q.astype(np.float64) @ rho.astype(dtype), rtol=1e-14 if dtype == np.float64 else 1e-6)
+        assert stats[0] == 0 and stats[3] == 0 and stats[1] < 1e-5
+        for row in range(n):
+            neg = q.copy()
+            neg[row, 4] = -1e-30
+            assert _kernel.belief_weights(neg, rho, zero)[1][0] > 0
+            off = q.copy()
+            off[row] *= 1.01
+            st = _kernel.belief_weights(off, rho, zero)[1]
+            assert st[2] == row and st[1] == pytest.approx(0.01, rel=1e-3)
+            nan = q.copy()
+            nan[row, 0] = np.nan
+            st = _kernel.belief_weights(nan, rho, zero)[1]
+            assert st[2] == row and st[1] == np.inf
+            leak = q.copy()
+            leak[row, 2] = 1e-3
+            assert _kernel.belief_weights(leak, rho, zero)[1][3] > 0
