@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from llvmlite import ir
 from numba import types
-from numba.core import cgutils
 from numba.extending import intrinsic
 
 __all__ = ["prefetch"]
@@ -28,7 +27,7 @@ def prefetch(typingctx, array, index):
         i8p = ir.IntType(8).as_pointer()
         i32 = ir.IntType(32)
         fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
-        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch.p0i8")
+        fn = builder.module.declare_intrinsic("llvm.prefetch", [i8p], fnty)  # name mangled by llvmlite
         address = builder.bitcast(builder.gep(data, [args[1]]), i8p)
         # (address, rw = 0 read, locality = 3 keep in all levels, cache type = 1 data)
         builder.call(fn, [address, ir.Constant(i32, 0), ir.Constant(i32, 3), ir.Constant(i32, 1)])
