@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from hypothesis import given, seed, settings
@@ -249,3 +251,37 @@ def test_a_zarr_backed_voxel_map_end_to_end(tmp_path):
     _close(np.asarray(zarr.open_array(str(tmp_path / "posterior.zarr"), mode="r")),
            fuse(g, ref.source_probability(LIK, PRIOR)))
     np.testing.assert_array_equal(zarr.open_array(str(tmp_path / "beliefs.zarr"), mode="r")[:], q)  # not written
+
+
+@pytest.mark.slow
+def test_a_chunked_map_on_a_real_scheduler_and_workers_equals_the_numpy_map(real_cluster):
+    # the graphs of a chunked map (room evidence, log-space updates, lazy reductions, fusion) travel to two
+    # worker processes and come back equal to the numpy map
+    from distributed import Client, get_task_stream
+
+    rng = np.random.default_rng(20)
+    shape, layers = (30, 24), 3
+    labels = rng.integers(-1, 3, size=shape)
+    table = _room_table(rng, 3)
+    ref = ClassBeliefMap.from_rooms(labels, table, PRIOR, CLASSES, layers=layers)
+    lazy = ClassBeliefMap.from_rooms(da.from_array(labels, chunks=(8, 12)), table, PRIOR, CLASSES, layers=layers)
+    for _ in range(3):
+        cells = np.column_stack([rng.integers(0, shape[0], 5), rng.integers(0, shape[1], 5)])
+        where = rng.integers(0, layers, 5)
+        lik = rng.dirichlet(np.ones(K), size=5)
+        ref.update(cells, lik, layers=where)
+        lazy.update(cells, lik, layers=where)
+    p_z = lazy.source_probability(LIK, PRIOR)
+    g = rng.dirichlet(np.ones(p_z.size)).reshape(p_z.shape)
+    with Client(real_cluster.address, timeout=30) as client:
+        with get_task_stream(client) as stream:
+            probs, most, got_p_z, fused = client.compute([lazy.probs, lazy.most_likely(), p_z, fuse(g, p_z)],
+                                                         sync=True)
+        pids = client.run(os.getpid)  # worker address -> pid
+    ran_on = {pids[task["worker"]] for task in stream.data}
+    assert len(stream.data) > 10 and ran_on <= {w.pid for w in real_cluster.workers}  # run by the workers
+    _close(probs, ref.probs)
+    np.testing.assert_array_equal(most, ref.most_likely())
+    expected = ref.source_probability(LIK, PRIOR)
+    _close(got_p_z, expected)
+    _close(fused, fuse(g, expected))
