@@ -98,7 +98,7 @@ def semantic_information_gain(
     if is_dask_array(class_probs) or is_dask_array(olfactory):  # chunked over cells, lazy: psgsl_pgm._dask_arrays
         return _dask_arrays.information_gain_dask(class_probs, source_likelihood, class_prior, olfactory=olfactory,
                                                   gas_probs=gas_probs, predictive=predictive, validate=validate)
-    from ._kernel import ORDER, belief_moments, entropy_terms, gain_from_moments  # compiled on first use
+    from ._kernel import ORDER, belief_moments, cell_logs, entropy_terms, gain_from_moments  # compiled on first use
 
     if _ORDER != ORDER:
         raise RuntimeError(f"_infogain._ORDER = {_ORDER} but the compiled kernels hold {ORDER} moments")
@@ -125,6 +125,7 @@ def semantic_information_gain(
         raise ValueError(
             "olfactory and the semantic term have no cell in common: their fusion is zero everywhere"
         )
-    entropy = entropy_terms(w, f, f_uniform, total) if paper else 0.0  # H(S)
-    gain = gain_from_moments(q2, w, moments, f, f_uniform, total, rho, rho_log_rho, entropy, _RADIUS, paper)
+    logs = cell_logs(w, f)  # log w_n, log f_n (NumPy's SIMD log)
+    entropy = entropy_terms(w, f, f_uniform, total, logs) if paper else 0.0  # H(S)
+    gain = gain_from_moments(q2, w, moments, f, f_uniform, total, rho, rho_log_rho, entropy, _RADIUS, paper, logs)
     return gain.reshape(cell_shape)

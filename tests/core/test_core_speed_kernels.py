@@ -157,11 +157,12 @@ def test_float32_stays_float32_without_a_float64_copy_of_the_beliefs():
     assert semantic_source_probability(q, lik, prior, source_prior=sp).dtype == np.float32
     assert semantic_source_probability(q.reshape(400, 500, k), lik, prior, column_axis=0).dtype == np.float32
     assert fuse(olf, semantic_source_probability(q, lik, prior)).dtype == np.float32
-    # peak extra memory: (n,) vectors for the closed form; + (n, 9) float64 moments for the gain. A float64
-    # copy of the beliefs alone would be 2× the input.
+    # peak extra memory: (n,) vectors for the closed form; for the gain (n, 9) float64 moments and six (n,)
+    # float64 vectors (w, f, log w, log f, the gain, one temporary). A float64 copy of the beliefs alone would be
+    # 2× the input.
     for fn, bound in [
         (lambda: fuse(olf, semantic_source_probability(q, lik, prior)), 28 * n),
-        (lambda: semantic_information_gain(q, lik, prior, olfactory=olf), (9 + 4) * 8 * n),
+        (lambda: semantic_information_gain(q, lik, prior, olfactory=olf), (9 + 6) * 8 * n),
     ]:
         fn()
         tracemalloc.start()
