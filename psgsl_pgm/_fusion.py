@@ -21,10 +21,11 @@ def fuse(*posteriors, prior=None):
     .. math:: p(s_c | e_1, \dots, e_m) \propto \frac{\prod_j p(s_c | e_j)}{p(s_c)^{m-1}},
 
     which for a uniform prior and m = 2 is eq. ``combined-conditionals``,
-    p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z). Computed in linear space in one compiled pass per input (which
-    also validates it); the cells whose product would leave float64's normal range (below 2^-1000, e.g.
-    1e-300 · 1e-300) are recomputed in log space, so the result is exact to round-off for any number of
-    cells or inputs and never NaN.
+    p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z). Computed in linear space by compiled passes that also validate
+    the inputs: for two inputs one pass forms the normaliser and a second writes the result (no temporary);
+    for more, one pass per input builds the product. The cells whose product would leave float64's normal
+    range (below 2^-1000, e.g. 1e-300 · 1e-300) are recomputed in log space, so the result is exact to
+    round-off for any number of cells or inputs and never NaN.
 
     Parameters
     ----------
