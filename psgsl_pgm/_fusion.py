@@ -57,7 +57,7 @@ def fuse(*posteriors, prior=None):
         raise TypeError("fuse needs at least one posterior, got none")
     if any(is_dask_array(p) for p in (*posteriors, prior)):  # chunked over cells, lazy: psgsl_pgm._dask_arrays
         return _dask_arrays.fuse_dask(*posteriors, prior=prior)
-    from ._kernel import fuse_finish, fuse_pair, fuse_step, fuse_sum, fuse_write  # compiled on first use
+    from ._kernel import fuse_finish, fuse_step, fuse_sum, fuse_write  # compiled on first use
 
     arrays = [as_float_array(p, f"posteriors[{j}]", min_ndim=1) for j, p in enumerate(posteriors)]
     shape = arrays[0].shape
@@ -95,11 +95,7 @@ def fuse(*posteriors, prior=None):
 
     # Linear space: p_c = Π_j p(s_c|e_j), one pass per input that also checks it (sign, finiteness, sum).
     prod = np.empty(flat[0].size)
-    if len(flat) == 1:
-        stats = [fuse_step(prod, flat[0], True)]
-    else:
-        stats = list(fuse_pair(prod, flat[0], flat[1]))
-        stats += [fuse_step(prod, a, False) for a in flat[2:]]
+    stats = [fuse_step(prod, a, j == 0) for j, a in enumerate(flat)]
     _check_inputs(arrays, stats)
     linear_total, marked, zero_support = fuse_finish(prod, pr, extra)  # ÷ p(s)^(m-1), Σ_c
     _check_support(zero_support, flat, pr, shape)

@@ -50,7 +50,6 @@ __all__ = [
     "gain_from_moments",
     "fuse_sum",
     "fuse_write",
-    "fuse_pair",
     "fuse_step",
     "fuse_finish",
 ]
@@ -134,6 +133,7 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
     nought = rho[0] - rho[0]  # 0 in q's dtype (rho is finite)
     lo = np.empty(k, q.dtype)
     leak = np.empty(k, q.dtype)
+    sums = np.empty(ROWS)  # row sums of the current block (float64: exact for float32 sums)
     ahead = AHEAD // q.itemsize
     line = LINE // q.itemsize
     size = q.size
@@ -173,7 +173,10 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
                 w[r + 2] = a2
                 w[r + 3] = a3
                 tot += (np.float64(a0) + np.float64(a1)) + (np.float64(a2) + np.float64(a3))
-                sums = (s0, s1, s2, s3)
+                sums[0] = s0
+                sums[1] = s1
+                sums[2] = s2
+                sums[3] = s3
             else:  # the last rows of the array
                 for j in range(rows):
                     acc = nought
@@ -185,25 +188,18 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
                         lo[i] = min(lo[i], x)
                     w[r + j] = acc
                     tot += acc
-                    d = abs(np.float64(s) - 1.0)
-                    if d != d:
-                        d = math.inf
-                    if d > worst:
-                        worst = d
-                        worst_row = r + j
-                sums = (nought, nought, nought, nought)
+                    sums[j] = s
             if has_zero:
                 for j in range(rows):
                     for i in range(k):
                         leak[i] = max(leak[i], q[r + j, i] * zero[i])
-            if rows == ROWS:
-                for j in range(ROWS):
-                    d = abs(np.float64(sums[j]) - 1.0)
-                    if d != d:
-                        d = math.inf
-                    if d > worst:
-                        worst = d
-                        worst_row = r + j
+            for j in range(rows):
+                d = abs(sums[j] - 1.0)
+                if d != d:
+                    d = math.inf
+                if d > worst:
+                    worst = d
+                    worst_row = r + j
             r += rows
         part[c, 0] = -lo.min()
         part[c, 1] = worst
@@ -457,34 +453,6 @@ def _fuse_write(out, a, b, prior, extra, total, c0, c1):
 
 
 @nb.njit(**_JIT)
-def _fuse_pair(p, a, b, part, c0, c1):
-    """p = a · b element-wise (float64), with the checks of both inputs; see :func:`fuse_step`."""
-    n = p.shape[0]
-    for c in range(c0, c1):
-        neg_a = 0
-        neg_b = 0
-        sa = 0.0
-        sb = 0.0
-        unsafe = 0
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            x = np.float64(a[i])
-            y = np.float64(b[i])
-            neg_a += x < 0
-            neg_b += y < 0
-            sa += x
-            sb += y
-            z = x * y
-            bad = (z < TINY) & (x > 0) & (y > 0)
-            unsafe += bad
-            p[i] = -1.0 if bad else z
-        part[c, 0] = neg_a
-        part[c, 1] = sa
-        part[c, 2] = neg_b
-        part[c, 3] = sb
-        part[c, 4] = unsafe
-
-
-@nb.njit(**_JIT)
 def _fuse_step(p, a, first, part, c0, c1):
     """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a).
 
@@ -662,21 +630,8 @@ def fuse_write(out, a, b, prior, extra: int, total: float) -> None:
     run(_fuse_write, n, PASS_WORK * n, out, a, b, prior, extra, total)
 
 
-def fuse_pair(p, a, b):
-    """p = a · b element-wise (float64), checking both inputs; returns ([neg a, Σ a, marked], [neg b, Σ b, marked]).
-
-    A cell whose product of positive factors falls below :data:`TINY` is marked −1 (the caller recomputes it
-    in log space).
-    """
-    n = p.shape[0]
-    part = np.zeros((n_chunks(n), 5))
-    run(_fuse_pair, n, 3 * n, p, a, b, part)
-    t = part.sum(axis=0)
-    return t[[0, 1, 4]], t[[2, 3, 4]]
-
-
 def fuse_step(p, a, first: bool):
-    """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a); marks as :func:`fuse_pair`.
+    """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a); marks as :func:`_fuse_step`.
 
     Returns [negative entries of a, Σ a, newly marked cells].
     """
