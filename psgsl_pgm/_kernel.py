@@ -11,8 +11,9 @@ overlap the arithmetic. Fusion of two inputs takes two passes and no temporary: 
 output, written once.
 
 Rows are grouped in fixed chunks of :data:`CHUNK` cells; the compiled loops release the GIL, and :func:`run`
-hands contiguous ranges of chunks to one thread per core. Partial sums are kept per chunk and added in chunk
-order, so results do not depend on the number of threads.
+hands contiguous ranges of chunks to one thread per core as each finishes its last (a core slowed by other
+work takes fewer). Partial sums are kept per chunk and added in chunk order, so results do not depend on the
+number of threads or on who ran which range.
 
 Floating-point contract: float32 beliefs are read as float32 (no float64 copy of the array is ever made); the
 weights are accumulated in float32, as a BLAS ``sgemv`` would, the moments in float64. NaN and ±inf
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
 import numba as nb
@@ -67,6 +69,7 @@ PASS_WORK = 16  # the work a cell of a light per-cell pass (fusion, entropy) cou
 #                arrays read per cell, with compares and products; measured, two threads pay off from about
 #                half a million cells
 
+SPLITS = 8  # ranges per thread handed out by run(): a slower core takes fewer of them
 PARALLEL_MIN = 1 << 23  # elements read below which one thread is used: ~5 ms of work, more than a thread
 #                        hand-off costs even on a loaded machine
 
@@ -87,18 +90,30 @@ def run(kernel, n: int, work: int, *args) -> None:
     """Run ``kernel(*args, c0, c1)`` over the chunks [0, ⌈n / CHUNK⌉) of n cells.
 
     The kernels release the GIL, so when ``work`` (elements read) is at least :data:`PARALLEL_MIN` the chunks
-    are split into one contiguous range per core and run on a thread pool; otherwise on the calling thread.
-    Every kernel writes per-chunk partial results into arrays the caller owns, so the outcome does not depend
-    on how the chunks were split.
+    are split into :data:`SPLITS` contiguous ranges per core, which the calling thread and one pool thread
+    per further core take in turn until none is left (a core slowed by other work takes fewer); otherwise
+    they run on the calling thread. Every kernel writes per-chunk partial results into arrays the caller
+    owns, so the outcome does not depend on how the chunks were split or who ran them.
     """
     nch = (n + CHUNK - 1) // CHUNK
-    parts = min(_THREADS, nch) if work >= PARALLEL_MIN else 1
-    if parts <= 1:
+    threads = min(_THREADS, nch) if work >= PARALLEL_MIN else 1
+    if threads <= 1:
         kernel(*args, 0, nch)
         return
+    parts = min(nch, SPLITS * threads)
     edges = [nch * i // parts for i in range(parts + 1)]
-    futures = [_pool().submit(kernel, *args, edges[i], edges[i + 1]) for i in range(1, parts)]
-    kernel(*args, edges[0], edges[1])  # the calling thread takes the first range itself
+    ranges = deque(range(parts))  # popleft is thread-safe: each range is taken exactly once
+
+    def drain():
+        while True:
+            try:
+                i = ranges.popleft()
+            except IndexError:
+                return
+            kernel(*args, edges[i], edges[i + 1])
+
+    futures = [_pool().submit(drain) for _ in range(threads - 1)]
+    drain()  # the calling thread works too
     for fut in futures:
         fut.result()
 

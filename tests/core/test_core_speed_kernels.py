@@ -96,6 +96,32 @@ def test_results_do_not_depend_on_how_the_chunks_are_split_between_threads(monke
         np.testing.assert_array_equal(s, p)
 
 
+def test_run_hands_every_chunk_to_exactly_one_thread_and_a_slow_thread_takes_fewer(monkeypatch):
+    import threading
+    import time
+
+    monkeypatch.setattr(_kernel, "_THREADS", 2)
+    monkeypatch.setattr(_kernel, "_POOL", None)
+    caller = threading.get_ident()
+    taken = []
+
+    def kernel(c0, c1):  # the calling thread is slowed, as a core busy with other work would be
+        taken.append((c0, c1, threading.get_ident()))
+        time.sleep(0.05 if threading.get_ident() == caller else 0.001)
+
+    n = 64 * _kernel.CHUNK - 5
+    _kernel.run(kernel, n, _kernel.PARALLEL_MIN)
+    ranges = sorted((c0, c1) for c0, c1, _ in taken)
+    assert ranges[0][0] == 0 and ranges[-1][1] == _kernel.n_chunks(n)
+    assert all(a[1] == b[0] and a[0] < a[1] for a, b in zip(ranges, ranges[1:]))  # a partition, no gap or overlap
+    assert len(ranges) == _kernel.SPLITS * 2
+    by_caller = sum(1 for *_, t in taken if t == caller)
+    assert by_caller < _kernel.SPLITS  # fewer than the half a static split would have given it
+    taken.clear()
+    _kernel.run(kernel, n, _kernel.PARALLEL_MIN - 1)  # below the threshold: one call on the calling thread
+    assert taken == [(0, _kernel.n_chunks(n), caller)]
+
+
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize(
     "bad, match",
