@@ -18,7 +18,7 @@ _DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 def add_parser(subparsers):
     """Register ``psgsl search``."""
     from .experiment import ESTIMATORS, VARIANTS
-    from .search import OPEN_SPACE_POLICIES, POLICIES
+    from .search import OPEN_SPACE_POLICIES, POLICIES, SCORES
 
     workers = min(2, os.cpu_count() or 1)
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
@@ -38,6 +38,9 @@ def add_parser(subparsers):
                    help=f"seeds 0..N-1, N at most {MAX_SEEDS} (default: %(default)s)")
     p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
+    p.add_argument("--score", choices=SCORES, default="per-time",
+                   help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
+                   "(default: %(default)s)")
     p.add_argument("--workers", type=worker_count, default=workers,
                    help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     add_scheduler_argument(p)
@@ -128,10 +131,10 @@ def _run(args) -> int:
     sources = [parse_source(s) for s in names]  # ValueError -> one line, exit 2
     config = ExperimentConfig(gas=spec.gas) if spec is not None and spec.gas else ExperimentConfig()
     try:
+        search = SearchConfig(time_budget=args.budget, score=args.score)
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),
-                                    out=args.out, workers=args.workers, search=SearchConfig(time_budget=args.budget),
-                                    config=config, progress=not args.quiet, figures=not args.no_figures,
-                                    scheduler=args.scheduler, world=args.world)
+                                    out=args.out, workers=args.workers, search=search, config=config, progress=not args.quiet,
+                                    figures=not args.no_figures, scheduler=args.scheduler, world=args.world)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     for key, summary in summaries.items():

@@ -9,7 +9,7 @@ from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._loop import SearchConfig, SearchRun, run_closed_loop
 from ._metrics import credible_region, paired_difference, survival, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
-from ._policies import POLICIES, Decision, Situation, choose, score_per_time, travel_time
+from ._policies import POLICIES, SCORES, Decision, Situation, choose, score_per_time, travel_time
 from ._space import FreeSpace
 from ._store import load_search_run, save_search_run
 
@@ -21,6 +21,7 @@ __all__ = [
     "OPEN_SPACE_POLICIES",
     "OpenSpaceSearch",
     "POLICIES",
+    "SCORES",
     "SearchConfig",
     "SearchRun",
     "Situation",

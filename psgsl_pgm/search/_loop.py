@@ -25,7 +25,7 @@ from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
 from ._metrics import credible_region
-from ._policies import POLICIES, Situation, choose
+from ._policies import POLICIES, SCORES, Situation, choose
 from ._space import FreeSpace
 
 __all__ = ["SearchConfig", "SearchRun", "run_closed_loop"]
@@ -53,6 +53,9 @@ class SearchConfig:
         Start position, m (the tour's).
     credible : float
         Mass of the declared credible region.
+    score : {"per-time", "gain"}
+        How ``infotaxis`` and ``space-aware-infotaxis`` score a candidate pose: its gain per second of driving,
+        turning and sensing (the default), or its gain alone (:mod:`psgsl_pgm.search._policies`).
     """
 
     found_radius: float = 0.5
@@ -63,11 +66,17 @@ class SearchConfig:
     clearance: float = 0.25
     start: tuple = (0.8, 6.0)
     credible: float = 0.9
+    score: str = "per-time"
 
     def __post_init__(self):
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "start":
+            if f.name == "score":
+                if not isinstance(v, str):
+                    raise TypeError(f"score must be one of {SCORES}, got {type(v).__name__}")
+                if v not in SCORES:
+                    raise ValueError(f"score must be one of {SCORES}, got {v!r}")
+            elif f.name == "start":
                 v = tuple(real_pair(v, "start", "an (x, y)", "metres").tolist())
             elif f.name == "n_headings":
                 v = index(v, "n_headings", minimum=1)
@@ -78,8 +87,12 @@ class SearchConfig:
             object.__setattr__(self, f.name, v)
 
     def to_dict(self) -> dict:
+        """The settings as JSON types; the default ``score`` is left out, so that runs stored before the option
+        existed still match (and resume)."""
         d = asdict(self)
         d["start"] = list(self.start)
+        if d["score"] == "per-time":
+            del d["score"]
         return d
 
 
@@ -289,7 +302,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             turn = 0.0  # the tour turns between its own headings (visit), as in the experiment
         else:
             sit = Situation(post, beliefs, variant, space, cell, heading, config.speed, config.turn_time,
-                            sense_time, search.horizon, r, cache)
+                            sense_time, search.horizon, r, cache, search.score)
             dec = choose(policy, sit)
             cells = dec.path
             seg = space.position(cells)

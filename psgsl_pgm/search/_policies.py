@@ -3,16 +3,22 @@ r"""Policies of the closed loop in a house: given the beliefs and the robot's po
 Every policy sees a :class:`Situation` (the variant's posterior, the beliefs, the robot's cell and heading,
 the free space) and returns a :class:`Decision` (the next cell, the camera headings there, the path).
 
-**Scoring rule (gain per unit time).** Candidate poses p = (cell, heading) are those of
+**Scoring rule** (:data:`SCORES`). Candidate poses p = (cell, heading) are those of
 :meth:`FreeSpace.candidates`. Each costs the time
 
 .. math:: \tau(p) = d(p)/v + t_\text{turn}\,|\Delta\theta(p)|/(\pi/2) + t_\text{sense},
 
 the geodesic drive d at speed v, the camera turn Δθ from the current heading (``turn_time`` per quarter turn,
-as on the tour), and the fixed time of one gas reading. A policy's gain G(p) is divided by τ(p):
-score(p) = G(p)/τ(p) when G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it). The
-best score wins; ties go to the first candidate (lattice order) and the first heading. The robot always moves
-(:meth:`FreeSpace.candidates`).
+as on the tour), and the fixed time of one gas reading.
+
+* ``"per-time"`` (the default) — a policy's gain G(p) is divided by τ(p): score(p) = G(p)/τ(p) when
+  G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it).
+* ``"gain"`` — score(p) = G(p): the most informative pose within the horizon, however long it takes to reach.
+  Dividing by τ favours the short, cheap moves around the robot where every pose gains little; in the house
+  that kept infotaxis out of the bedroom (README, "Closed-loop search").
+
+The best score wins; ties go to the first candidate (lattice order) and the first heading. The robot always
+moves (:meth:`FreeSpace.candidates`).
 
 * ``infotaxis`` — the expected information of the next stop, Vergassola et al. (2007) with the probability
   P_f(p) of finding the source there (the posterior mass within ``found_radius``):
@@ -39,10 +45,12 @@ from scipy.special import entr
 
 from .._infogain import semantic_information_gain
 
-__all__ = ["Decision", "POLICIES", "Situation", "choose", "olfactory_gain", "score_per_time", "travel_time"]
+__all__ = ["Decision", "POLICIES", "SCORES", "Situation", "choose", "olfactory_gain", "score_per_time", "travel_time"]
 
 #: Policies of the closed loop.
 POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis")
+#: Rules that turn a pose's gain G and time τ into its score (module docstring).
+SCORES = ("per-time", "gain")
 
 
 @dataclass
@@ -67,6 +75,8 @@ class Situation:
     cache : dict
         Per-run cache of static rows (the hit model and its binary entropy per candidate cell; they depend on the
         map and the estimator only); one dict per run, empty at the start.
+    score : {"per-time", "gain"}
+        How ``infotaxis`` and ``space-aware-infotaxis`` score a pose (:data:`SCORES`).
     """
 
     posterior: np.ndarray
@@ -81,6 +91,7 @@ class Situation:
     horizon: float
     found_radius: float
     cache: dict = field(default_factory=dict)
+    score: str = "per-time"
 
 
 @dataclass(frozen=True)
@@ -111,6 +122,15 @@ def score_per_time(gain, tau) -> np.ndarray:
     if np.any(tau <= 0):
         raise ValueError("travel times must be positive")
     return np.where(gain > 0, gain / tau, gain * tau)
+
+
+def _score(sit: Situation, gain, tau) -> np.ndarray:
+    """The score of every candidate pose under ``sit.score`` (module docstring)."""
+    if sit.score == "per-time":
+        return score_per_time(gain, tau)
+    if sit.score == "gain":
+        return np.asarray(gain, dtype=np.float64)
+    raise ValueError(f"score must be one of {SCORES}, got {sit.score!r}")
 
 
 def _candidates(sit: Situation):
@@ -225,8 +245,8 @@ def choose(policy: str, sit: Situation) -> Decision:
                         float(-d_target[k]))
     if policy == "infotaxis":
         cells, drive, pred, tau = _candidates(sit)
-        return _best(score_per_time(infotaxis_gain(sit, cells), tau), cells, pred, drive, sit)
+        return _best(_score(sit, infotaxis_gain(sit, cells), tau), cells, pred, drive, sit)
     if policy == "space-aware-infotaxis":
         cells, drive, pred, tau = _candidates(sit)
-        return _best(score_per_time(space_aware_gain(sit, cells), tau), cells, pred, drive, sit)
+        return _best(_score(sit, space_aware_gain(sit, cells), tau), cells, pred, drive, sit)
     raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")

@@ -71,3 +71,21 @@ def test_table_of_a_single_run_has_no_interval(tmp_path):
              "coverage90": 1.0, "n_runs": 1}
     text = format_search_table({"infotaxis/semantics+rooms": entry})
     assert "n/a" in text and "161.4" in text
+
+
+def test_the_scoring_rule_is_stored_with_the_runs_and_a_grid_of_the_other_rule_is_refused(tmp_path, capsys):
+    from psgsl_pgm.search import load_search_run
+
+    out = tmp_path / "s"
+    argv = ["search", "--sources", "oven", "--policies", "infotaxis", "--variants", "olfaction", "--seeds", "1",
+            "--budget", "12", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv + ["--score", "gain"]) == 0
+    (path,) = (out / "runs").iterdir()
+    assert load_search_run(path).config["search"]["score"] == "gain"
+    capsys.readouterr()
+    assert main(argv) == 2  # the default rule, per-time, into the same directory
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "computed with another configuration" in err[0]
+    with pytest.raises(SystemExit) as exc:
+        main(argv + ["--score", "fastest"])
+    assert exc.value.code == 2

@@ -123,3 +123,14 @@ def test_search_config_is_validated():
     with pytest.raises(ValueError, match="n_headings must be an int >= 1"):
         SearchConfig(n_headings=8.5)
     assert SearchConfig(time_budget=12).to_dict()["time_budget"] == 12.0
+    with pytest.raises(ValueError, match=r"score must be one of \('per-time', 'gain'\), got 'fast'"):
+        SearchConfig(score="fast")
+    with pytest.raises(TypeError, match=r"score must be one of \('per-time', 'gain'\), got NoneType"):
+        SearchConfig(score=None)
+
+
+def test_the_default_score_is_left_out_of_stored_settings_so_older_runs_still_resume():
+    assert "score" not in SearchConfig().to_dict()  # runs stored before the option existed match the default
+    stored = SearchConfig(score="gain").to_dict()
+    assert stored["score"] == "gain" and SearchConfig(**stored) == SearchConfig(score="gain")
+    assert SearchConfig(**SearchConfig().to_dict()) == SearchConfig()

@@ -158,3 +158,30 @@ def test_space_aware_gain_on_a_certain_belief_is_the_drive_saved(situation):
         else:
             expect = np.log2(d_now) - np.log2(d)
         np.testing.assert_allclose(got[k], expect, rtol=1e-9)
+
+
+@pytest.mark.parametrize("policy, gain_of, differ", [("infotaxis", infotaxis_gain, True),
+                                                     ("space-aware-infotaxis", space_aware_gain, False)])
+def test_the_scoring_rule_picks_the_best_gain_per_second_or_the_best_gain(situation, policy, gain_of, differ):
+    from psgsl_pgm.search import SCORES, choose
+    from psgsl_pgm.search._policies import _wrap
+
+    sit = Situation(**{**situation.__dict__, "horizon": 4.0})  # far poses too: there the rules can disagree
+    space = sit.space
+    cells, drive, _ = space.candidates(sit.cell, sit.horizon)
+    gain = gain_of(sit, cells)
+    tau = travel_time(drive[:, None], _wrap(space.headings[None, :] - sit.heading), speed=sit.speed,
+                      turn_time=sit.turn_time, sense_time=sit.sense_time)
+    chosen = {}
+    for rule in SCORES:
+        dec = choose(policy, Situation(**{**sit.__dict__, "score": rule}))
+        k = int(np.flatnonzero(cells == dec.cell)[0])
+        h = int(np.flatnonzero(np.isclose(space.headings, dec.headings[0]))[0])
+        chosen[rule] = (k, h)
+        want = score_per_time(gain, tau) if rule == "per-time" else gain
+        assert want[k, h] == want.max() and dec.score == pytest.approx(want.max(), rel=1e-12)
+    assert (chosen["per-time"] != chosen["gain"]) == differ
+    # with positive gains, the pose of the larger gain and the smaller gain per second takes at least as long
+    assert gain[chosen["gain"]] >= gain[chosen["per-time"]] > 0 and tau[chosen["gain"]] >= tau[chosen["per-time"]]
+    with pytest.raises(ValueError, match=r"score must be one of \('per-time', 'gain'\), got 'fastest'"):
+        choose(policy, Situation(**{**sit.__dict__, "score": "fastest"}))
