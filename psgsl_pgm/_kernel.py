@@ -5,7 +5,7 @@ row (k values) is in L1, derives every per-cell quantity the caller needs — th
 w_c = q_c · ρ, the row sum, the number of negative entries, the mass on zero-prior classes and, for the
 information gain, the central moments of ρ under q_c. The weight kernel reduces :data:`ROWS` rows at a time
 (one load of ρ_i serves four dot products) and is memory-bound. The moments kernel does about five times the
-arithmetic per entry and is compute-bound on a 2-core machine (measured: 85–90 ns per 80-class row and core,
+arithmetic per entry and is compute-bound on a 2-core machine (measured: 85–96 ns per 80-class row and core,
 in cache). Both prefetch the rows :data:`AHEAD` bytes on (:mod:`psgsl_pgm._prefetch`), so that memory reads
 overlap the arithmetic. Fusion of two inputs takes two passes and no temporary: the normaliser, then the
 output, written once.
