@@ -133,8 +133,9 @@ def _run(args) -> int:
     try:
         search = SearchConfig(time_budget=args.budget, score=args.score)
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),
-                                    out=args.out, workers=args.workers, search=search, config=config, progress=not args.quiet,
-                                    figures=not args.no_figures, scheduler=args.scheduler, world=args.world)
+                                    out=args.out, workers=args.workers, search=search, config=config,
+                                    progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler,
+                                    world=args.world)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     for key, summary in summaries.items():

@@ -25,7 +25,7 @@ from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
 from ._metrics import credible_region
-from ._policies import POLICIES, SCORES, Situation, choose
+from ._policies import POLICIES, Situation, check_score, choose
 from ._space import FreeSpace
 
 __all__ = ["SearchConfig", "SearchRun", "run_closed_loop"]
@@ -72,10 +72,7 @@ class SearchConfig:
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "score":
-                if not isinstance(v, str):
-                    raise TypeError(f"score must be one of {SCORES}, got {type(v).__name__}")
-                if v not in SCORES:
-                    raise ValueError(f"score must be one of {SCORES}, got {v!r}")
+                v = check_score(v)
             elif f.name == "start":
                 v = tuple(real_pair(v, "start", "an (x, y)", "metres").tolist())
             elif f.name == "n_headings":

@@ -45,7 +45,8 @@ from scipy.special import entr
 
 from .._infogain import semantic_information_gain
 
-__all__ = ["Decision", "POLICIES", "SCORES", "Situation", "choose", "olfactory_gain", "score_per_time", "travel_time"]
+__all__ = ["Decision", "POLICIES", "SCORES", "Situation", "check_score", "choose", "olfactory_gain", "score_per_time",
+           "travel_time"]
 
 #: Policies of the closed loop.
 POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis")
@@ -124,13 +125,20 @@ def score_per_time(gain, tau) -> np.ndarray:
     return np.where(gain > 0, gain / tau, gain * tau)
 
 
+def check_score(value) -> str:
+    """``value`` if it names a scoring rule of :data:`SCORES`; TypeError or ValueError naming them otherwise."""
+    if not isinstance(value, str):
+        raise TypeError(f"score must be one of {SCORES}, got {type(value).__name__}")
+    if value not in SCORES:
+        raise ValueError(f"score must be one of {SCORES}, got {value!r}")
+    return value
+
+
 def _score(sit: Situation, gain, tau) -> np.ndarray:
     """The score of every candidate pose under ``sit.score`` (module docstring)."""
-    if sit.score == "per-time":
+    if check_score(sit.score) == "per-time":
         return score_per_time(gain, tau)
-    if sit.score == "gain":
-        return np.asarray(gain, dtype=np.float64)
-    raise ValueError(f"score must be one of {SCORES}, got {sit.score!r}")
+    return np.asarray(gain, dtype=np.float64)  # "gain"
 
 
 def _candidates(sit: Situation):
