@@ -124,7 +124,7 @@ _DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def _seeds_text(seeds: range) -> str:
-    return f"1 seed ({seeds.start})" if len(seeds) == 1 else f"{len(seeds)} seeds ({seeds.start}-{seeds.stop - 1})"
+    return f"{len(seeds)} seeds" + (f" from seed {seeds.start}" if seeds.start else "")
 
 
 def _load_array(path, name):

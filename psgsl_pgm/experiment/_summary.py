@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 from pathlib import Path
 
 import numpy as np
 
+from .._grid_runner import atomic_write
 from ._config import VARIANTS
 from ._metrics import calibration_summary, mean_ci
 
@@ -93,15 +95,19 @@ def _clean(obj):
 
 
 def write_summary(summary: dict, path) -> Path:
-    path = Path(path)
-    path.write_text(json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8")
-    return path
+    """``summary`` as strict JSON (NaN -> null) at ``path``, written atomically."""
+    text = json.dumps(_clean(summary), indent=2, allow_nan=False) + "\n"
+    return atomic_write(path, lambda t, fh: fh.write(t.encode("utf-8")), text)
 
 
 def write_csv(runs, path) -> Path:
-    """Long-format per-step metrics: one row per run, step and variant."""
-    path = Path(path)
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    """Long-format per-step metrics: one row per run, step and variant (written atomically)."""
+    return atomic_write(path, _write_csv_rows, list(runs))
+
+
+def _write_csv_rows(runs, raw) -> None:
+    fh = io.TextIOWrapper(raw, encoding="utf-8", newline="")
+    try:
         w = csv.writer(fh)
         w.writerow(["source", "estimator", "seed", "step", "progress", "time_s", "x", "y", "hit", "variant",
                     "error_m", "spread_m", "region90_hit", "region90_area_m2", "hpd_level"])
@@ -113,7 +119,9 @@ def write_csv(runs, path) -> Path:
                                 f"{run.position[j, 0]:.3f}", f"{run.position[j, 1]:.3f}", int(run.hit[j]), name,
                                 f"{run.error[j, v]:.6f}", f"{run.spread[j, v]:.6f}", int(run.region_hit[j, v]),
                                 f"{run.region_area[j, v]:.6g}", f"{run.hpd_level[j, v]:.6f}"])
-    return path
+    finally:
+        fh.flush()
+        fh.detach()  # the runner's file: it fsyncs and closes it
 
 
 def _fmt(stat: dict) -> str:
