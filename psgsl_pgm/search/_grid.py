@@ -83,6 +83,7 @@ def summarize_runs(runs) -> dict:
         "km": km,
         "path_ratio": mean_ci(ratio),
         **calibration_summary(runs),
+        "credible": float(runs[0].config["search"].get("credible", 0.9)),  # the mass of the region measured
         "final_error": mean_ci([r.error[-1] for r in runs], lower=0.0),
         "mean_error": mean_ci([_time_mean(r.time, r.error) for r in runs], lower=0.0),
         "seeds": [int(r.seed) for r in runs],
