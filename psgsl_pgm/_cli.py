@@ -19,7 +19,7 @@ from pathlib import Path
 
 from . import _cli_export
 from ._cli_grid import (MAX_SEEDS, MAX_WORKERS, add_scheduler_argument, interrupted, positive_int, seed_count,
-                        worker_count)
+                        seed_range, worker_count)
 
 __all__ = ["build_parser", "error_line", "main"]
 
@@ -84,6 +84,7 @@ def _experiment(args) -> int:
     from ._output import prepare_output_dir
     from .experiment import ExperimentConfig, check_sources, format_table, parse_source, run_experiment
 
+    seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
     spec = None
     if args.world is not None:
         from .sim import load_world
@@ -101,13 +102,13 @@ def _experiment(args) -> int:
         for s in sources:  # every source must exist in this world before any run starts
             spec.resolve_source(s, spec.house(0))
     else:
-        check_sources(sources, seeds=range(args.seeds))  # unknown class, off the map: refused before any run
+        check_sources(sources, seeds=seeds)  # unknown class, off the map: refused before any run
     prepare_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
     where = "the embedded house" if spec is None else args.world
-    print(f"psgsl experiment: {where}, sources {', '.join(map(str, names))}, {args.seeds} seeds, gas "
+    print(f"psgsl experiment: {where}, sources {', '.join(map(str, names))}, {_seeds_text(seeds)}, gas "
           f"{config.gas!r} -> {args.out}", flush=True)
     try:
-        summaries = run_experiment(sources, range(args.seeds), args.estimators, out=args.out, workers=args.workers,
+        summaries = run_experiment(sources, seeds, args.estimators, out=args.out, workers=args.workers,
                                    progress=not args.quiet, config=config, scheduler=args.scheduler,
                                    world=args.world)
     except GridInterrupted as exc:
@@ -120,6 +121,10 @@ def _experiment(args) -> int:
 
 
 _DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
+
+
+def _seeds_text(seeds: range) -> str:
+    return f"{len(seeds)} seeds" + (f" from seed {seeds.start}" if seeds.start else "")
 
 
 def _load_array(path, name):
@@ -227,7 +232,10 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--sources", nargs="+", default=None,
                      help="object class names, 'x,y' positions or the world file's source names (default: the "
                      "world's sources; for the embedded house oven bed 5.0,6.0)")
-    exp.add_argument("--seeds", type=seed_count, default=10, help=f"seeds 0..N-1, N at most {MAX_SEEDS} (default: %(default)s)")
+    exp.add_argument("--seeds", type=seed_count, default=10,
+                     help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
+    exp.add_argument("--first-seed", default="0", metavar="N",
+                     help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
     exp.add_argument("--workers", type=worker_count, default=workers,

@@ -17,7 +17,7 @@ import shlex
 import sys
 
 __all__ = ["EXIT_INTERRUPTED", "MAX_SEEDS", "MAX_WORKERS", "add_scheduler_argument", "interrupted", "positive_float",
-           "positive_int", "seed_count", "worker_count"]
+           "positive_int", "seed_count", "seed_range", "worker_count"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
@@ -54,6 +54,26 @@ def positive_float(text):
 def seed_count(text):
     """argparse type of ``--seeds``: 1 to :data:`MAX_SEEDS`."""
     return positive_int(text, MAX_SEEDS)
+
+
+def seed_range(first, count: int) -> range:
+    """The seeds of ``--first-seed N --seeds S``: N, …, N + S − 1.
+
+    ``first`` is the option's text (or an int); anything but an integer >= 0 is a :class:`ValueError` naming
+    ``--first-seed`` (the command reports it in one line, exit code 2, before any output). Seeds are stored as
+    int64, so the last one must stay below 2**63.
+    """
+    text = str(first).strip()
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise ValueError(f"--first-seed must be an integer >= 0, got {str(first)!r}") from None
+    if value < 0:
+        raise ValueError(f"--first-seed must be an integer >= 0, got {str(first)!r}")
+    if value + count - 1 >= 2**63:
+        raise ValueError(f"--first-seed + --seeds - 1 must be below 2**63 (seeds are stored as int64), got "
+                         f"{str(first)!r} and {count}")
+    return range(value, value + count)
 
 
 def worker_count(text):

@@ -1,4 +1,5 @@
-"""The paper's metrics (Sec. "Validation") and confidence intervals over runs."""
+"""The paper's metrics (Sec. "Validation"), the calibration of the declared credible regions, and confidence
+intervals over runs."""
 
 from __future__ import annotations
 
@@ -8,7 +9,8 @@ from scipy import stats
 from .._validate import (as_float_array, check_nonnegative, check_sums, describe, real_number, real_pair,
                          unit_interval)
 
-__all__ = ["error_and_spread", "mean_ci"]
+__all__ = ["CALIBRATION_POINTS", "calibration_summary", "credible_region", "error_and_spread", "hpd_level", "mean_ci",
+           "at_fractions"]
 
 
 def error_and_spread(posteriors, centres, truth):
@@ -62,6 +64,139 @@ def error_and_spread(posteriors, centres, truth):
         raise ValueError(f"centres and truth: the error or the spread exceeds the float64 range (coordinates up to "
                          f"{max(np.abs(c).max(), np.abs(truth).max()):.3g} m)")
     return error, spread
+
+
+def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
+    """The smallest set of cells holding at least ``mass`` of the distribution (its highest-probability cells).
+
+    Parameters
+    ----------
+    posterior : (..., ) array_like
+        A distribution over cells (sums to 1).
+    mass : float
+        In (0, 1).
+
+    Returns
+    -------
+    region : ndarray of bool, the posterior's shape
+        Ties at the boundary are broken by cell order (the region has the minimal number of cells).
+
+    Examples
+    --------
+    >>> credible_region([0.5, 0.1, 0.3, 0.1], 0.75).tolist()
+    [True, False, True, False]
+    """
+    p = np.asarray(posterior, dtype=np.float64)
+    if not 0 < mass < 1:
+        raise ValueError(f"mass must lie in (0, 1), got {mass!r}")
+    if not (np.isfinite(p).all() and (p >= 0).all() and abs(p.sum() - 1.0) < 1e-6):
+        raise ValueError("posterior must be a distribution (finite, >= 0, sums to 1)")
+    flat = p.ravel()
+    order = np.argsort(-flat, kind="stable")
+    csum = np.cumsum(flat[order])
+    k = int(np.searchsorted(csum, mass * csum[-1] * (1 - 1e-12))) + 1  # first prefix reaching the mass
+    region = np.zeros(flat.size, bool)
+    region[order[:k]] = True
+    return region.reshape(p.shape)
+
+
+def hpd_level(posterior, cell) -> float:
+    """HPD level of a cell: the smallest credible mass whose highest-density region contains it.
+
+    The highest-density region of mass α is {c : p_c ≥ k} with the largest threshold k that reaches α; the
+    smallest such region holding ``cell`` is {c : p_c ≥ p_cell}, so the level is Σ_{c: p_c ≥ p_cell} p_c (over
+    the total mass). Cells *tied* with ``cell`` count in full — a region holds a cell only with every cell as
+    probable, so a cell of a flat posterior over m cells has level 1, not 1/m — and a tie is equality up to
+    rounding: |p_c − p_cell| ≤ max(1e-12, 8 ε) p_cell, ε the machine epsilon of the posterior's dtype (cells
+    equal in exact arithmetic differ in their last bits after the posterior's products and sums). A calibrated
+    posterior puts the true source at a level that is about uniform on [0, 1] over runs (median ½); an
+    overconfident one pushes it towards 1.
+
+    The :func:`credible_region` of mass α (the fewest cells reaching α) holds ``cell`` whenever its level is
+    ≤ α, and, the region being discrete, also for α in (level − p_cell, level) (it then ends with the cells
+    as probable as ``cell``).
+
+    Parameters
+    ----------
+    posterior : (...) array_like
+        A distribution over cells.
+    cell : int
+        Flat (C-order) index of the cell.
+
+    Examples
+    --------
+    >>> hpd_level([0.5, 0.125, 0.25, 0.125], 2), hpd_level([0.5, 0.125, 0.25, 0.125], 1)
+    (0.75, 1.0)
+    """
+    arr = np.asarray(posterior)
+    eps = np.finfo(arr.dtype).eps if arr.dtype.kind == "f" else np.finfo(np.float64).eps
+    p = arr.astype(np.float64).ravel()
+    cell = int(cell)
+    if not 0 <= cell < p.size:
+        raise ValueError(f"cell must be a flat index in [0, {p.size}), got {cell}")
+    total = p.sum()
+    if not (np.isfinite(p).all() and (p >= 0).all() and total > 0):
+        raise ValueError("posterior must be a distribution (finite, >= 0, positive total)")
+    floor = p[cell] * (1.0 - max(1e-12, 8.0 * float(eps)))
+    return float(min(1.0, p[p >= floor].sum() / total))
+
+
+#: Fractions of a run at which the coverage of the credible region is reported (summary key -> fraction).
+CALIBRATION_POINTS = {"quarter": 0.25, "half": 0.5, "three_quarters": 0.75, "final": 1.0}
+
+
+def at_fractions(time, values, fractions) -> np.ndarray:
+    """``values`` in effect at the fractions f of a run: the value of the last step j with time[j] ≤ f·time[-1].
+
+    A posterior holds from its stop until the next, so the state "at a quarter of the run" is the last one
+    recorded by then (f = 1: the final step).
+
+    Parameters
+    ----------
+    time : (n + 1,) array_like
+        Non-decreasing times of the steps, s (step 0 at 0).
+    values : (n + 1, ...) array_like
+    fractions : (f,) array_like
+        In [0, 1].
+
+    Returns
+    -------
+    (f, ...) ndarray
+    """
+    t = np.asarray(time, dtype=np.float64)
+    v = np.asarray(values)
+    f = np.asarray(fractions, dtype=np.float64)
+    if t.ndim != 1 or t.size == 0 or v.shape[:1] != t.shape:
+        raise ValueError(f"time must be (n + 1,) and values (n + 1, ...), got {describe(t)} and {describe(v)}")
+    j = np.searchsorted(t, f * t[-1] * (1 + 1e-12), side="right") - 1
+    return v[np.clip(j, 0, t.size - 1)]
+
+
+def calibration_summary(runs, *, variant=None) -> dict:
+    """Calibration of the 90 % credible regions over runs (each with per-step ``time``, ``region_hit``,
+    ``region_area`` and ``hpd_level``; ``variant`` indexes their last axis when they hold several variants).
+
+    Returns
+    -------
+    dict
+        ``{"coverage90": {"quarter", "half", "three_quarters", "final"}`` — the fraction of runs whose region
+        contains the true source's cell at ¼, ½, ¾ of the run and at its end (:func:`at_fractions`);
+        ``"region_area90"``: the region's area at the end, m², ``{"mean", "ci95"}`` (Student t over runs, cut at
+        0); ``"hpd_level"``: the true cell's HPD level at the end, ``{"median", "mean"}``}.
+    """
+    def pick(run, name):
+        a = np.asarray(getattr(run, name))
+        return a if variant is None else a[:, variant]
+
+    fr = list(CALIBRATION_POINTS.values())
+    hits = np.array([at_fractions(r.time, pick(r, "region_hit"), fr) for r in runs], dtype=bool)  # (runs, 4)
+    area = [float(pick(r, "region_area")[-1]) for r in runs]
+    level = np.array([float(pick(r, "hpd_level")[-1]) for r in runs])
+    return {
+        "coverage90": {k: float(hits[:, i].mean()) for i, k in enumerate(CALIBRATION_POINTS)},
+        "region_area90": mean_ci(area, lower=0.0),
+        "hpd_level": {"median": float(np.median(level)), "mean": float(level.mean())},
+    }
 
 
 def mean_ci(values, *, level: float = 0.95, lower: float | None = None) -> dict:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._config import VARIANTS, ExperimentConfig
-from ._metrics import error_and_spread
+from ._metrics import credible_region, error_and_spread, hpd_level
 from ._step import VariantPosteriors, semantic_terms, start_run, visit
 from ._tour import Tour, exploration_tour
 
@@ -47,6 +47,12 @@ class RunResult:
         ``{step: (3, H, W) ndarray}`` posteriors at the requested steps (for Fig. progression).
     config : dict
         The :class:`ExperimentConfig` of the run, as a dict.
+    region_hit : (n + 1, 3) ndarray of bool
+        Whether each variant's 90 % credible region (:func:`credible_region`) contains the true source's cell.
+    region_area : (n + 1, 3) ndarray
+        That region's area, m².
+    hpd_level : (n + 1, 3) ndarray
+        HPD level of the true source's cell (:func:`hpd_level`).
     """
 
     source: str
@@ -60,6 +66,9 @@ class RunResult:
     spread: np.ndarray
     snapshots: dict = field(default_factory=dict)
     config: dict = field(default_factory=dict)
+    region_hit: np.ndarray = field(default_factory=lambda: np.zeros((0, len(VARIANTS)), bool))
+    region_area: np.ndarray = field(default_factory=lambda: np.zeros((0, len(VARIANTS))))
+    hpd_level: np.ndarray = field(default_factory=lambda: np.zeros((0, len(VARIANTS))))
 
     @property
     def n_steps(self) -> int:
@@ -128,6 +137,11 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     times = np.zeros(n + 1)
     pos = np.empty((n + 1, 2))
     hits = np.zeros(n + 1, dtype=bool)
+    region_hit = np.zeros((n + 1, len(VARIANTS)), dtype=bool)
+    region_area = np.empty((n + 1, len(VARIANTS)))
+    level = np.empty((n + 1, len(VARIANTS)))
+    truth_cell = int(np.ravel_multi_index(tuple(int(v) for v in house.grid.world_to_cell(truth)), house.shape))
+    cell_area = house.grid.resolution**2
     snaps = {}
     t0 = world.time
 
@@ -135,6 +149,11 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         post = beliefs.posteriors(VARIANTS)  # p(s | g), and p(s | g, z) without / with rooms
         err[step], spr[step] = error_and_spread(post, centres, truth)
         times[step] = world.time - t0
+        for v in range(len(VARIANTS)):  # calibration of the declared 90 % region
+            region = credible_region(post[v], 0.9)
+            region_hit[step, v] = region.ravel()[truth_cell]
+            region_area[step, v] = float(region.sum()) * cell_area
+            level[step, v] = hpd_level(post[v], truth_cell)
         if step in keep:
             snaps[step] = post
 
@@ -146,7 +165,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         record(j + 1)
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
     return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps,
-                     run_config(config, setting))
+                     run_config(config, setting), region_hit, region_area, level)
 
 
 def run_config(config: ExperimentConfig, world_spec) -> dict:

@@ -28,6 +28,7 @@ def write_run(result: RunResult, fh) -> None:
         fh, source=np.array(result.source), seed=np.array(result.seed), estimator=np.array(result.estimator),
         source_xy=result.source_xy, time=result.time, position=result.position, hit=result.hit,
         error=result.error, spread=result.spread, snapshot_steps=steps, snapshots=snaps,
+        region_hit=result.region_hit, region_area=result.region_area, hpd_level=result.hpd_level,
         config=np.array(json.dumps(result.config, sort_keys=True)),
     )
 
@@ -57,7 +58,8 @@ def load_run(path) -> RunResult:
             steps = z["snapshot_steps"]
             snaps = {int(s): z["snapshots"][i] for i, s in enumerate(steps)}
             return RunResult(str(z["source"]), int(z["seed"]), str(z["estimator"]), z["source_xy"], z["time"],
-                             z["position"], z["hit"], z["error"], z["spread"], snaps, json.loads(str(z["config"])))
+                             z["position"], z["hit"], z["error"], z["spread"], snaps, json.loads(str(z["config"])),
+                             z["region_hit"], z["region_area"], z["hpd_level"])
     except (*READ_ERRORS, KeyError, TypeError) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise ValueError(f"{path} is not a run file written by psgsl ({reason}); delete it to recompute the run") from None

@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 from pathlib import Path
 
 import numpy as np
 
+from .._grid_runner import atomic_write
 from ._config import VARIANTS
-from ._metrics import mean_ci
+from ._metrics import calibration_summary, mean_ci
 
 __all__ = ["EARLY", "aligned", "format_table", "summarize", "write_csv", "write_summary"]
 
@@ -34,7 +36,8 @@ def aligned(runs, name: str, grid) -> np.ndarray:
 
 
 def summarize(runs) -> dict:
-    """Mean and 95 % CI (Student t over runs) of the early and final error and spread, per variant.
+    """Mean and 95 % CI (Student t over runs) of the early and final error and spread, and the calibration of the
+    90 % credible region, per variant.
 
     Errors and spreads are distances (≥ 0): their intervals are the t-intervals intersected with [0, ∞)
     (``mean_ci(..., lower=0)``, which keeps the coverage). Paired differences can be negative and keep the
@@ -44,7 +47,9 @@ def summarize(runs) -> dict:
     -------
     dict
         ``{"n_runs": n, "seeds": [...], "early_progress": 0.25, <variant>: {"early_error": {"mean", "ci95"},
-        "final_error": ..., "mean_error": ..., "early_spread": ..., "final_spread": ...}, "paired": {...}}``.
+        "final_error": ..., "mean_error": ..., "early_spread": ..., "final_spread": ..., "coverage90": {"quarter",
+        "half", "three_quarters", "final"}, "region_area90": {"mean", "ci95"}, "hpd_level": {"median", "mean"}},
+        "paired": {...}}`` (the calibration keys: :func:`calibration_summary`).
         ``mean_error`` is the error averaged over the whole search (101 equally spaced progress points: the
         area under the error curve, small when the error falls early). ``paired`` holds the mean and CI of
         per-run *differences* (e.g. olfaction − semantics), which is the right test of "lower than" when all
@@ -64,6 +69,7 @@ def summarize(runs) -> dict:
             "mean_error": mean_ci(area[:, v], lower=0.0),
             "early_spread": mean_ci(spr[:, 0, v], lower=0.0),
             "final_spread": mean_ci(spr[:, 1, v], lower=0.0),
+            **calibration_summary(runs, variant=v),
         }
     pairs = (("olfaction", "semantics"), ("olfaction", "semantics+rooms"), ("semantics", "semantics+rooms"))
     out["paired"] = {
@@ -89,26 +95,33 @@ def _clean(obj):
 
 
 def write_summary(summary: dict, path) -> Path:
-    path = Path(path)
-    path.write_text(json.dumps(_clean(summary), indent=2) + "\n", encoding="utf-8")
-    return path
+    """``summary`` as strict JSON (NaN -> null) at ``path``, written atomically."""
+    text = json.dumps(_clean(summary), indent=2, allow_nan=False) + "\n"
+    return atomic_write(path, lambda t, fh: fh.write(t.encode("utf-8")), text)
 
 
 def write_csv(runs, path) -> Path:
-    """Long-format per-step metrics: one row per run, step and variant."""
-    path = Path(path)
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    """Long-format per-step metrics: one row per run, step and variant (written atomically)."""
+    return atomic_write(path, _write_csv_rows, list(runs))
+
+
+def _write_csv_rows(runs, raw) -> None:
+    fh = io.TextIOWrapper(raw, encoding="utf-8", newline="")
+    try:
         w = csv.writer(fh)
         w.writerow(["source", "estimator", "seed", "step", "progress", "time_s", "x", "y", "hit", "variant",
-                    "error_m", "spread_m"])
+                    "error_m", "spread_m", "region90_hit", "region90_area_m2", "hpd_level"])
         for run in runs:
             n = run.n_steps
             for j in range(n + 1):
                 for v, name in enumerate(VARIANTS):
                     w.writerow([run.source, run.estimator, run.seed, j, f"{j / n:.6f}", f"{run.time[j]:.3f}",
                                 f"{run.position[j, 0]:.3f}", f"{run.position[j, 1]:.3f}", int(run.hit[j]), name,
-                                f"{run.error[j, v]:.6f}", f"{run.spread[j, v]:.6f}"])
-    return path
+                                f"{run.error[j, v]:.6f}", f"{run.spread[j, v]:.6f}", int(run.region_hit[j, v]),
+                                f"{run.region_area[j, v]:.6g}", f"{run.hpd_level[j, v]:.6f}"])
+    finally:
+        fh.flush()
+        fh.detach()  # the runner's file: it fsyncs and closes it
 
 
 def _fmt(stat: dict) -> str:
@@ -129,4 +142,12 @@ def format_table(summary: dict, *, title: str = "") -> str:
         s = summary[name]
         lines.append(f"{name:<16} {_fmt(s['early_error']):>21} {_fmt(s['final_error']):>21} "
                      f"{_fmt(s['mean_error']):>21} {_fmt(s['final_spread']):>21}")
+    head = (f"{'variant':<16} {'90 % region covers the source at 1/4, 1/2, 3/4, end':>52} "
+            f"{'final area, m²':>21} {'HPD level: median':>18}")
+    lines += ["", "calibration: runs whose 90 % credible region holds the source's cell (fraction); the source "
+              "cell's HPD level", head, "-" * len(head)]
+    for name in VARIANTS:
+        s = summary[name]
+        cov = "  ".join(f"{s['coverage90'][k]:.2f}" for k in ("quarter", "half", "three_quarters", "final"))
+        lines.append(f"{name:<16} {cov:>52} {_fmt(s['region_area90']):>21} {s['hpd_level']['median']:18.3f}")
     return "\n".join(lines)

@@ -7,11 +7,12 @@ from ._demo import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
 from ._figures import plot_paths, plot_survival
 from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._loop import SearchConfig, SearchRun, run_closed_loop
-from ._metrics import credible_region, paired_difference, survival, wilson_interval
+from ._metrics import credible_region, hpd_level, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
 from ._policies import POLICIES, SCORES, Decision, Situation, choose, score_per_time, travel_time
 from ._space import FreeSpace
 from ._store import load_search_run, save_search_run
+from ._survival import holm, kaplan_meier, paired_comparison, rmst, sign_flip_pvalue
 
 __all__ = [
     "DEMO_BUDGET",
@@ -29,18 +30,22 @@ __all__ = [
     "credible_region",
     "grid_size",
     "hit_probability",
+    "holm",
+    "hpd_level",
+    "kaplan_meier",
     "load_search_run",
     "open_space_benchmark",
-    "paired_difference",
+    "paired_comparison",
     "plot_paths",
     "plot_survival",
+    "rmst",
     "run_closed_loop",
     "run_search_demo",
     "run_search_grid",
     "save_search_run",
     "score_per_time",
+    "sign_flip_pvalue",
     "summarize_runs",
-    "survival",
     "travel_time",
     "wilson_interval",
     "write_search_outputs",

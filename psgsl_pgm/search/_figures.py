@@ -1,16 +1,20 @@
-"""Figures of the closed loop: survival curves and the robots' paths over their final posteriors."""
+"""Figures of the closed loop: Kaplan–Meier survival curves and the robots' paths over their final posteriors."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._metrics import survival
+from ._survival import kaplan_meier, rmst
 
 __all__ = ["plot_paths", "plot_survival"]
 
 
 def plot_survival(groups: dict, *, title: str = ""):
-    """Fraction of runs not yet found against simulated time, one line per ``"<policy>/<variant>"``.
+    """Kaplan–Meier curves P(not found by t) with their 95 % pointwise bands, one per ``"<policy>/<variant>"``.
+
+    Each curve is :func:`psgsl_pgm.search._survival.kaplan_meier` of the runs' times to find, censored at the
+    budget; its band (log(−log) Greenwood) is shaded in the curve's colour, and the legend gives the RMST with
+    its 95 % interval.
 
     Parameters
     ----------
@@ -19,21 +23,32 @@ def plot_survival(groups: dict, *, title: str = ""):
     """
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    fig, ax = plt.subplots(figsize=(6.8, 4.4 + 0.12 * len(groups)), layout="constrained")
     budget = max(r.config["search"]["time_budget"] for v in groups.values() for r in v)
-    grid = np.linspace(0.0, budget, 501)
     styles = {"olfaction": ":", "semantics": "--", "semantics+rooms": "-"}
-    for key, runs in groups.items():
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, (key, runs) in enumerate(groups.items()):
         policy, variant = key.split("/")
-        s = survival([r.time_to_find for r in runs], [r.found for r in runs], grid)
-        ax.step(grid, s, where="post", ls=styles.get(variant, "-"), label=f"{key} (n = {len(runs)})")
-    ax.set_xlabel("simulated time since the start [s]")
-    ax.set_ylabel("fraction of runs not yet found [-]")
+        t = [r.time_to_find for r in runs]
+        found = np.array([r.found for r in runs])
+        km = kaplan_meier(t, found)
+        area = rmst(t, found, budget)
+        x = np.append(km["t"], budget)  # the last step holds until the budget
+        c = colours[i % len(colours)]
+        lo, hi = area["ci95"]
+        ax.step(x, np.append(km["survival"], km["survival"][-1]), where="post", color=c,
+                ls=styles.get(variant, "-"), lw=1.6,
+                label=f"{key} (n = {len(runs)}; RMST {area['value']:.0f} s [{lo:.0f}, {hi:.0f}])")
+        ax.fill_between(x, np.append(km["lower"], km["lower"][-1]), np.append(km["upper"], km["upper"][-1]),
+                        step="post", color=c, alpha=0.12, lw=0)
+    ax.set_xlabel("simulated time since the start, t [s]")
+    ax.set_ylabel("P(not found by t) [-], Kaplan–Meier")
     ax.set_xlim(0, budget)
     ax.set_ylim(-0.02, 1.02)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower left")
-    ax.set_title(title or "survival: runs not yet within found_radius of the source", fontsize=9)
+    fig.legend(fontsize=7, loc="outside lower center", ncols=2, frameon=False)
+    ax.set_title((title + "\n" if title else "") + "survival with 95 % pointwise bands (log(−log) Greenwood); "
+                 "runs not found censored at the budget", fontsize=8)
     return fig
 
 

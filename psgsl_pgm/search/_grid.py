@@ -13,13 +13,14 @@ import numpy as np
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
 from ..experiment._driver import _world
-from ..experiment._metrics import mean_ci
+from ..experiment._metrics import calibration_summary, mean_ci
 from ._loop import SearchConfig, run_closed_loop
-from ._metrics import paired_difference, wilson_interval
+from ._metrics import wilson_interval
 from ._policies import POLICIES
 from ._store import load_search_run, search_run_path, write_search_run
+from ._survival import holm, kaplan_meier, km_median, paired_comparison, rmst
 
-__all__ = ["run_search_grid", "summarize_runs", "write_search_outputs"]
+__all__ = ["PRIMARY", "run_search_grid", "summarize_runs", "write_search_outputs"]
 
 
 def _config_of(config: ExperimentConfig, search: SearchConfig, world=None) -> dict:
@@ -41,26 +42,50 @@ def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None
     return run
 
 
+#: The comparison declared before the runs (README "Closed-loop search"): in ``paired.json`` of source oven,
+#: estimator infotaxis, it is marked ``"primary": true`` and tested alone at 5 %; every other comparison of a table
+#: is secondary and Holm-adjusted within its table.
+PRIMARY = {"source": "oven", "estimator": "infotaxis",
+           "comparison": "infotaxis/semantics+rooms - infotaxis/olfaction"}
+
+
+def _budget(runs) -> float:
+    budgets = {float(r.config["search"]["time_budget"]) for r in runs}
+    if len(budgets) != 1:
+        raise ValueError(f"runs of one table must share one time budget, got {sorted(budgets)} s")
+    return budgets.pop()
+
+
 def summarize_runs(runs) -> dict:
-    """Statistics of one policy × variant over its runs (see :func:`run_search_grid`)."""
+    """Statistics of one policy × variant over its runs (see :func:`run_search_grid`).
+
+    Times to find are censored at the budget τ (:mod:`psgsl_pgm.search._survival`): ``km`` is the Kaplan–Meier
+    curve of P(not found by t) with 95 % log(−log) Greenwood bands, ``rmst`` the restricted mean time to find
+    RMST(τ) = ∫₀^τ S(t) dt with its 95 % Greenwood interval, ``time_to_find.median`` the Kaplan–Meier median (None
+    when more than half of the runs are not found). ``coverage90``, ``region_area90`` and ``hpd_level`` measure the
+    calibration of the declared credible region (:func:`psgsl_pgm.experiment._metrics.calibration_summary`);
+    ``mean_error`` is the error averaged over the search time (:func:`_time_mean`).
+    """
+    runs = list(runs)
     found = np.array([r.found for r in runs])
     t = np.array([r.time_to_find for r in runs])
     n = len(runs)
-    budget = runs[0].config["search"]["time_budget"]
-    ttf = mean_ci(t)
-    ttf.update(median=float(np.median(t)), not_found=int((~found).sum()), budget=float(budget),
-               note="runs not found count at the budget")
+    budget = _budget(runs)
+    km = kaplan_meier(t, found)
+    area = rmst(t, found, budget)
     ratio = np.array([r.path_ratio for r in runs])
     return {
         "n_runs": n,
         "success_rate": {"value": float(found.mean()), "ci95": wilson_interval(int(found.sum()), n)},
-        "time_to_find": ttf,
+        "time_to_find": {"median": km_median(km), "not_found": int((~found).sum()), "budget": budget,
+                         "note": "Kaplan-Meier median (None: not reached within the budget)"},
+        "rmst": {"value": area["value"], "ci95": area["ci95"], "tau": budget},
+        "km": km,
         "path_ratio": mean_ci(ratio),
-        "coverage90": float(np.mean([r.region_hit[-1] for r in runs])),
-        "coverage90_all_steps": float(np.mean(np.concatenate([r.region_hit for r in runs]))),
-        "final_error": mean_ci([r.error[-1] for r in runs]),
-        "final_region_area": mean_ci([r.region_area[-1] for r in runs]),
-        "mean_error": mean_ci([_time_mean(r.time, r.error) for r in runs]),
+        **calibration_summary(runs),
+        "credible": float(runs[0].config["search"].get("credible", 0.9)),  # the mass of the region measured
+        "final_error": mean_ci([r.error[-1] for r in runs], lower=0.0),
+        "mean_error": mean_ci([_time_mean(r.time, r.error) for r in runs], lower=0.0),
         "seeds": [int(r.seed) for r in runs],
     }
 
@@ -72,9 +97,14 @@ def _time_mean(time, values) -> float:
     return float(np.sum(values[:-1] * np.diff(time)) / time[-1])
 
 
-def _paired(groups: dict) -> dict:
-    """Paired differences of time to find (same seeds): every key vs the same policy with ``olfaction``,
-    and vs ``tour`` (same variant if run, else ``tour/olfaction``)."""
+def _paired(groups: dict, *, source=None, estimator=None) -> dict:
+    """Paired comparisons of the RMST (same seeds): every key vs the same policy with ``olfaction``, and vs
+    ``tour`` (same variant if run, else ``tour/olfaction``).
+
+    Each entry ``"A - B"`` holds ``rmst_difference`` = RMST_A(τ) − RMST_B(τ) in s (negative: A finds the source
+    sooner) with its percentile-bootstrap interval over seeds, the sign-flip permutation ``p_value``, ``p_holm``
+    (Holm's adjustment over the table's secondary comparisons; the primary comparison, :data:`PRIMARY`, is tested
+    alone and keeps its p-value), ``primary``, ``n`` and the runs found by each side."""
     out = {}
     for key, runs in groups.items():
         policy, variant = key.split("/")
@@ -91,9 +121,23 @@ def _paired(groups: dict) -> dict:
             seeds = sorted(set(a) & set(b))
             if len(seeds) < 2:
                 continue
-            diff = paired_difference([a[s].time_to_find for s in seeds], [b[s].time_to_find for s in seeds])
-            diff["found_both"] = int(sum(a[s].found and b[s].found for s in seeds))
-            out[f"{key} - {ref}"] = {"time_to_find": diff}
+            budget = _budget([a[s] for s in seeds] + [b[s] for s in seeds])
+            cmp = paired_comparison([a[s].time_to_find for s in seeds], [b[s].time_to_find for s in seeds], budget)
+            name = f"{key} - {ref}"
+            primary = (source, estimator, name) == (PRIMARY["source"], PRIMARY["estimator"], PRIMARY["comparison"])
+            out[name] = {
+                "rmst_difference": {"value": cmp["value"], "ci95": cmp["ci95"], "interval": cmp["interval"]},
+                "p_value": cmp["p_value"], "test": cmp["test"], "primary": primary, "n": cmp["n"],
+                "seeds": seeds, "found": {"A": int(sum(a[s].found for s in seeds)),
+                                          "B": int(sum(b[s].found for s in seeds))},
+                "direction": "A - B, s: negative when A finds the source sooner",
+            }
+    secondary = [k for k, v in out.items() if not v["primary"]]
+    adjusted = holm([out[k]["p_value"] for k in secondary]) if secondary else []
+    for k, p in zip(secondary, adjusted):
+        out[k]["p_holm"] = float(p)
+    for v in out.values():
+        v.setdefault("p_holm", v["p_value"])  # the primary comparison: a family of one
     return out
 
 
@@ -116,7 +160,7 @@ def _write_json(obj, path: Path) -> None:
 
 _CSV = ("source", "estimator", "policy", "variant", "seed", "found", "time_to_find", "driven", "geodesic",
         "path_ratio", "n_steps", "final_error", "final_map_error", "final_spread", "final_region_area",
-        "final_region_hit", "mean_error")
+        "final_region_hit", "final_hpd_level", "mean_error")
 
 
 def _write_csv(runs, path: Path) -> None:
@@ -128,7 +172,8 @@ def _write_csv(runs, path: Path) -> None:
             w.writerow([r.source, r.estimator, r.policy, r.variant, r.seed, int(r.found), f"{r.time_to_find:.6g}",
                         f"{r.driven:.6g}", f"{r.geodesic:.6g}", f"{r.path_ratio:.6g}", r.n_steps,
                         f"{r.error[-1]:.6g}", f"{r.map_error[-1]:.6g}", f"{r.spread[-1]:.6g}",
-                        f"{r.region_area[-1]:.6g}", int(r.region_hit[-1]), f"{_time_mean(r.time, r.error):.6g}"])
+                        f"{r.region_area[-1]:.6g}", int(r.region_hit[-1]), f"{r.hpd_level[-1]:.6g}",
+                        f"{_time_mean(r.time, r.error):.6g}"])
     os.replace(tmp, path)
 
 
@@ -153,7 +198,7 @@ def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
         folder.mkdir(parents=True, exist_ok=True)
         summary = _finite({k: summarize_runs(v) for k, v in by_key.items()})
         _write_json(summary, folder / "summary.json")
-        _write_json(_paired(by_key), folder / "paired.json")
+        _write_json(_paired(by_key, source=source, estimator=estimator), folder / "paired.json")
         _write_csv([r for v in by_key.values() for r in v], folder / "runs.csv")
         top[f"{source}/{estimator}"] = summary
         if figures:

@@ -24,7 +24,7 @@ from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
-from ._metrics import credible_region
+from ._metrics import credible_region, hpd_level
 from ._policies import POLICIES, Situation, check_score, choose
 from ._space import FreeSpace
 
@@ -124,6 +124,9 @@ class SearchRun:
         Area of the credible region (smallest set of cells holding ``credible`` of the mass), m².
     region_hit : (n + 1,) ndarray of bool
         Whether that region contains the true source's cell.
+    hpd_level : (n + 1,) ndarray
+        HPD level of the true source's cell (:func:`psgsl_pgm.search.hpd_level`): the posterior mass of every cell
+        at least as probable as it.
     path : (p, 2) ndarray
         Every cell centre driven through, m (for drawing).
     final_posterior : (H, W) ndarray of float32
@@ -154,6 +157,7 @@ class SearchRun:
     path: np.ndarray
     final_posterior: np.ndarray
     config: dict = field(default_factory=dict)
+    hpd_level: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_steps(self) -> int:
@@ -254,7 +258,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     geodesic = float(d_start[reachable].min()) if reachable.any() else float("inf")
 
     rec = {k: [] for k in ("time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
-                           "region_area", "region_hit")}
+                           "region_area", "region_hit", "hpd_level")}
     cell_area = house.grid.resolution**2
     truth_cell = space.cell_of(truth)
     t0 = world.time
@@ -274,6 +278,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         rec["spread"].append(float(spr[0]))
         rec["region_area"].append(float(region.sum()) * cell_area)
         rec["region_hit"].append(bool(region.ravel()[truth_cell]))
+        rec["hpd_level"].append(hpd_level(post, truth_cell))
         return post
 
     start = space.position(start_cell)
@@ -334,4 +339,4 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                      arrays["heading"], arrays["hit"].astype(bool), arrays["path_length"], arrays["error"],
                      arrays["map_error"], arrays["spread"], arrays["region_area"], arrays["region_hit"].astype(bool),
                      np.array(path_pts), post.astype(np.float32),
-                     {"experiment": config.to_dict(), "search": search.to_dict()})
+                     {"experiment": config.to_dict(), "search": search.to_dict()}, arrays["hpd_level"])

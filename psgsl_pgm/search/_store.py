@@ -15,7 +15,7 @@ from ._loop import SearchRun
 __all__ = ["load_search_run", "save_search_run", "search_run_path", "write_search_run"]
 
 _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
-           "region_area", "region_hit", "path", "final_posterior")
+           "region_area", "region_hit", "hpd_level", "path", "final_posterior")
 
 
 def search_run_path(directory, source, policy: str, variant: str, estimator: str, seed: int) -> Path:

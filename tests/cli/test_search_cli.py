@@ -18,9 +18,12 @@ def test_search_grid_writes_summary_csv_figures_and_resumes(tmp_path, capsys):
     assert set(group) == {"tour/olfaction", "greedy/olfaction"}
     entry = group["greedy/olfaction"]
     assert set(entry["success_rate"]) == {"value", "ci95"}
-    assert {"mean", "ci95", "median"} <= set(entry["time_to_find"])
+    assert {"median", "not_found", "budget"} <= set(entry["time_to_find"]) and "mean" not in entry["time_to_find"]
+    assert set(entry["rmst"]) == {"value", "ci95", "tau"} and set(entry["km"]) == {"t", "survival", "lower", "upper"}
     assert set(entry["path_ratio"]) == {"mean", "ci95"}
-    assert entry["n_runs"] == 2 and 0.0 <= entry["coverage90"] <= 1.0
+    assert set(entry["coverage90"]) == {"quarter", "half", "three_quarters", "final"}
+    assert set(entry["region_area90"]) == {"mean", "ci95"} and set(entry["hpd_level"]) == {"median", "mean"}
+    assert entry["n_runs"] == 2 and 0.0 <= entry["coverage90"]["final"] <= 1.0
     rows = (out / "runs.csv").read_text().splitlines()
     assert len(rows) == 1 + 4 and rows[0].startswith("source,estimator,policy,variant,seed,found")
     for name in ("survival.png", "paths.png", "paired.json", "runs.csv"):
@@ -66,9 +69,8 @@ def test_table_of_a_single_run_has_no_interval(tmp_path):
     """One seed (the demo's): the summary's intervals are null and the table says n/a instead of failing."""
     from psgsl_pgm._cli_search import format_search_table
 
-    entry = {"success_rate": {"value": 1.0, "ci95": [0.21, 1.0]},
-             "time_to_find": {"mean": 161.4, "ci95": [None, None], "median": 161.4},
-             "coverage90": 1.0, "n_runs": 1}
+    entry = {"success_rate": {"value": 1.0, "ci95": [0.21, 1.0]}, "rmst": {"value": 161.4, "ci95": [None, None]},
+             "time_to_find": {"median": None}, "coverage90": {"final": 1.0}, "n_runs": 1}
     text = format_search_table({"infotaxis/semantics+rooms": entry})
     assert "n/a" in text and "161.4" in text
 
@@ -89,3 +91,31 @@ def test_the_scoring_rule_is_stored_with_the_runs_and_a_grid_of_the_other_rule_i
     with pytest.raises(SystemExit) as exc:
         main(argv + ["--score", "fastest"])
     assert exc.value.code == 2
+
+
+@pytest.mark.parametrize("command", ["search", "experiment"])
+@pytest.mark.parametrize("value", ["-1", "1.5", "two", ""])
+def test_a_bad_first_seed_is_one_line_and_exit_2_before_any_output(tmp_path, capsys, command, value):
+    out = tmp_path / "o"
+    assert main([command, "--first-seed", value, "--seeds", "1", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"psgsl {command}: error: --first-seed must be an integer >= 0, got {value!r}"]
+    assert not out.exists()
+
+
+def test_first_seed_runs_the_held_out_seeds_and_resumes(tmp_path):
+    from psgsl_pgm.search import load_search_run
+
+    out = tmp_path / "s"
+    argv = ["search", "--sources", "oven", "--policies", "tour", "--variants", "olfaction", "--seeds", "2",
+            "--first-seed", "7", "--budget", "5", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv) == 0
+    files = sorted((out / "runs").iterdir())
+    assert [load_search_run(f).seed for f in files] == [7, 8]
+    assert json.loads((out / "summary.json").read_text())["oven/infotaxis"]["tour/olfaction"]["seeds"] == [7, 8]
+    stamps = {p.name: p.stat().st_mtime_ns for p in files}
+    assert main(argv) == 0  # resumed: nothing recomputed
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
+    assert main(argv[:-2] + ["--first-seed", "8", "--seeds", "2", "--out", str(out)]) == 0  # 8 reused, 9 added
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir() if p.name in stamps} == stamps
+    assert json.loads((out / "summary.json").read_text())["oven/infotaxis"]["tour/olfaction"]["seeds"] == [7, 8, 9]

@@ -127,3 +127,23 @@ def test_usage_errors_exit_2(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["experiment", "--estimators", "kalman"])
     assert exc.value.code == 2
+
+
+def test_experiment_runs_held_out_seeds_from_first_seed_and_resumes(tmp_path, monkeypatch):
+    import psgsl_pgm.experiment._run as run_module
+    from psgsl_pgm.experiment import load_run
+
+    out = tmp_path / "e"
+    argv = ["experiment", "--sources", "oven", "--seeds", "2", "--first-seed", "11", "--estimators", "infotaxis",
+            "--stops", "2", "--workers", "1", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    assert sorted(load_run(p).seed for p in (out / "runs").iterdir()) == [11, 12]
+    summary = json.loads((out / "summary.json").read_text())["oven/infotaxis"]
+    assert summary["seeds"] == [11, 12]
+    assert set(summary["semantics+rooms"]["coverage90"]) == {"quarter", "half", "three_quarters", "final"}
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a finished run was recomputed")
+
+    monkeypatch.setattr(run_module, "run_search", refuse)
+    assert main(argv) == 0  # resumed from the stored seeds 11 and 12

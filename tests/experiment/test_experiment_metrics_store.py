@@ -64,14 +64,15 @@ def _fake_run(seed, n, rng):
     err = rng.uniform(0, 5, size=(n + 1, 3))
     return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), t, rng.uniform(0, 9, (n + 1, 2)),
                      rng.random(n + 1) < 0.2, err, rng.uniform(0, 2, size=(n + 1, 3)),
-                     {0: rng.dirichlet(np.ones(12), size=3).reshape(3, 3, 4)}, {"gas": "smoke", "speed": 0.25})
+                     {0: rng.dirichlet(np.ones(12), size=3).reshape(3, 3, 4)}, {"gas": "smoke", "speed": 0.25},
+                     rng.random((n + 1, 3)) < 0.6, rng.uniform(1, 30, (n + 1, 3)), rng.uniform(0, 1, (n + 1, 3)))
 
 
 def test_run_files_round_trip_and_bad_files_are_named(tmp_path):
     run = _fake_run(4, 20, np.random.default_rng(1))
     path = save_run(run, tmp_path / "runs" / "a.npz")
     back = load_run(path)
-    for name in ("source_xy", "time", "position", "hit", "error", "spread"):
+    for name in ("source_xy", "time", "position", "hit", "error", "spread", "region_hit", "region_area", "hpd_level"):
         np.testing.assert_array_equal(getattr(back, name), getattr(run, name))
     assert (back.source, back.seed, back.estimator) == ("oven", 4, "infotaxis")
     assert back.config == {"gas": "smoke", "speed": 0.25}
@@ -96,12 +97,20 @@ def test_summary_aligns_runs_of_different_length_by_search_progress(tmp_path):
         grid = np.linspace(0, 1, 101)
         area = [np.mean(np.interp(grid, np.arange(r.n_steps + 1) / r.n_steps, r.error[:, v])) for r in runs]
         np.testing.assert_allclose(s[name]["mean_error"]["mean"], np.mean(area), rtol=1e-12)
+        # calibration: the hit at the step in effect at ¼, ½, ¾ of the run's time and at the last step
+        for key, f in (("quarter", 0.25), ("half", 0.5), ("three_quarters", 0.75), ("final", 1.0)):
+            steps = [int(np.flatnonzero(r.time <= f * r.time[-1] * (1 + 1e-12))[-1]) for r in runs]
+            assert s[name]["coverage90"][key] == np.mean([r.region_hit[j, v] for r, j in zip(runs, steps)])
+        assert s[name]["region_area90"] == mean_ci([r.region_area[-1, v] for r in runs], lower=0.0)
+        levels = [r.hpd_level[-1, v] for r in runs]
+        assert s[name]["hpd_level"] == {"median": np.median(levels), "mean": np.mean(levels)}
     d = s["paired"]["olfaction - semantics"]["final_error"]
     assert d == mean_ci([r.error[-1, 0] - r.error[-1, 1] for r in runs])
     # a run with n = 8 has step 2 exactly at a quarter
     np.testing.assert_allclose(aligned(runs[:1], "error", [0.25])[0, 0], runs[0].error[2], rtol=0, atol=0)
     data = json.loads(write_summary(s, tmp_path / "s.json").read_text())
     assert set(data["semantics+rooms"]["final_error"]) == {"mean", "ci95"}
+    assert set(data["olfaction"]["coverage90"]) == {"quarter", "half", "three_quarters", "final"}
     lines = write_csv(runs, tmp_path / "m.csv").read_text().splitlines()
     assert len(lines) == 1 + 3 * sum(r.n_steps + 1 for r in runs)
     assert lines[0].startswith("source,estimator,seed,step,progress,time_s")
@@ -110,3 +119,61 @@ def test_summary_aligns_runs_of_different_length_by_search_progress(tmp_path):
 def test_summarize_needs_runs():
     with pytest.raises(ValueError, match="at least one run"):
         summarize([])
+
+
+def test_coverage_is_read_at_the_end_of_the_run_not_at_its_start():
+    """A region that holds the source only at the first step: final coverage 0 (and 1 where only the last holds)."""
+    from psgsl_pgm.experiment._metrics import calibration_summary
+
+    rng = np.random.default_rng(5)
+    runs = [_fake_run(s, 8, rng) for s in range(4)]
+    for r in runs:
+        r.region_hit[:] = False
+        r.region_hit[0] = True
+    c = calibration_summary(runs, variant=1)["coverage90"]
+    assert c == {"quarter": 0.0, "half": 0.0, "three_quarters": 0.0, "final": 0.0}
+    for r in runs:
+        r.region_hit[:] = False
+        r.region_hit[-1] = True
+    assert calibration_summary(runs, variant=1)["coverage90"]["final"] == 1.0
+
+
+def test_at_fractions_takes_the_step_in_effect():
+    from psgsl_pgm.experiment._metrics import at_fractions
+
+    t = np.array([0.0, 10.0, 30.0, 31.0, 40.0])
+    np.testing.assert_array_equal(at_fractions(t, np.arange(5), [0.0, 0.24, 0.25, 0.5, 0.77, 0.775, 1.0]),
+                                  [0, 0, 1, 1, 2, 3, 4])
+
+
+def test_hpd_level_by_hand_with_ties_and_against_brute_force():
+    from psgsl_pgm.experiment._metrics import credible_region, hpd_level
+
+    p = np.array([0.4, 0.2, 0.2, 0.2])
+    assert hpd_level(p, 0) == pytest.approx(0.4, rel=1e-15)
+    assert hpd_level(p, 2) == 1.0  # tied cells count in full: a region holds the cell only with its equals
+    assert hpd_level(np.full((3, 4), 1 / 12), 5) == pytest.approx(1.0, rel=1e-15)
+    rng = np.random.default_rng(9)
+    for _ in range(30):
+        q = rng.dirichlet(np.full(20, 0.4)).reshape(4, 5)
+        cell = int(rng.integers(20))
+        flat = q.ravel()
+        brute = sum(flat[k] for k in range(20) if flat[k] >= flat[cell])
+        level = hpd_level(q, cell)
+        assert level == pytest.approx(brute, rel=1e-12)
+        for mass in (0.3, 0.5, 0.8, 0.9, 0.95):
+            # no ties: the fewest cells reaching α hold the cell exactly when the more probable ones stay below α
+            hit = credible_region(q, mass).ravel()[cell]
+            assert hit == (level - flat[cell] < mass)
+            assert hit or level > mass
+    # rounding is not a ranking: a cell a few ulps below its equals keeps their level
+    r = np.array([0.3, 0.3, 0.2, 0.2])
+    r[1] = np.nextafter(np.nextafter(0.3, 0), 0)
+    assert hpd_level(r, 1) == pytest.approx(0.6, rel=1e-15) and hpd_level(r, 0) == pytest.approx(0.6, rel=1e-15)
+    r32 = np.array([0.3, 0.3, 0.2, 0.2], np.float32)
+    r32[0] = np.nextafter(np.float32(0.3), np.float32(1))
+    assert hpd_level(r32, 1) == pytest.approx(0.6, rel=1e-6)
+    assert hpd_level(np.array([0.3, 0.3 * (1 - 1e-9), 0.4 + 0.3e-9]), 1) == pytest.approx(1.0)  # a real difference
+    assert hpd_level(np.array([0.3, 0.3 * (1 - 1e-9), 0.4 + 0.3e-9]), 0) == pytest.approx(0.7)
+    with pytest.raises(ValueError, match="cell must be a flat index"):
+        hpd_level(p, 4)

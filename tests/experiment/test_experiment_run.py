@@ -36,6 +36,23 @@ def test_metrics_are_those_of_the_kept_posteriors(short_run):
         np.testing.assert_allclose(run.spread[step], spread, rtol=1e-12)
 
 
+def test_calibration_is_that_of_the_kept_posteriors(short_run):
+    """Region hit, area and HPD level at each kept step are those of that step's posterior, per variant."""
+    from psgsl_pgm.experiment._metrics import credible_region, hpd_level
+
+    run, world = short_run
+    g = world.house.grid
+    cell = int(np.ravel_multi_index(tuple(int(v) for v in g.world_to_cell(world.source)), world.house.shape))
+    assert run.region_hit.shape == run.region_area.shape == run.hpd_level.shape == (run.n_steps + 1, 3)
+    for step, post in run.snapshots.items():
+        for v in range(3):
+            region = credible_region(post[v], 0.9)
+            assert run.region_hit[step, v] == region.ravel()[cell]
+            assert run.region_area[step, v] == region.sum() * g.resolution**2
+            assert run.hpd_level[step, v] == hpd_level(post[v], cell)
+    assert not np.array_equal(run.hpd_level[0], run.hpd_level[-1])  # the stops move it
+
+
 def test_before_any_frame_camera_semantics_is_uninformative(short_run):
     """Class beliefs at the prior β give p(s | z) uniform (ρ̄ = Σ β L / β = 1), so 'semantics' = 'olfaction'."""
     run, _ = short_run

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from psgsl_pgm.search import SearchConfig, credible_region, paired_difference, run_closed_loop, survival, wilson_interval
+from psgsl_pgm.search import SearchConfig, credible_region, run_closed_loop, wilson_interval
 from psgsl_pgm.search._store import load_search_run, save_search_run
 
 
@@ -26,6 +26,11 @@ def test_tour_in_the_closed_loop_is_the_validation_experiment(house_space):
     # the metric itself is evaluated on a (1, H, W) instead of a (3, H, W) stack: BLAS rounding only
     np.testing.assert_allclose(run.error, ref.error[:, 2], rtol=1e-12)
     np.testing.assert_allclose(run.spread, ref.spread[:, 2], rtol=1e-12)
+    # calibration (region, its area, the source's HPD level) recorded at each stop as the experiment records it
+    np.testing.assert_array_equal(run.region_hit, ref.region_hit[:, 2])
+    np.testing.assert_array_equal(run.region_area, ref.region_area[:, 2])
+    np.testing.assert_array_equal(run.hpd_level, ref.hpd_level[:, 2])
+    assert ((run.hpd_level > 0) & (run.hpd_level <= 1)).all()
 
 
 @pytest.mark.slow
@@ -35,7 +40,7 @@ def test_a_short_infotaxis_run_is_consistent(house_space):
     run = run_closed_loop("oven", 1, "infotaxis", "semantics+rooms", search=search, space=space)
     n = run.n_steps + 1
     for a in (run.time, run.heading, run.hit, run.path_length, run.error, run.map_error, run.spread,
-              run.region_area, run.region_hit):
+              run.region_area, run.region_hit, run.hpd_level):
         assert a.shape == (n,)
     assert np.all(np.diff(run.time) > 0) and np.all(np.diff(run.path_length) >= 0)
     steps = np.linalg.norm(np.diff(run.position[1:], axis=0), axis=1)
@@ -64,7 +69,7 @@ def test_store_round_trip(tmp_path, house_space):
     run = run_closed_loop("oven", 2, "greedy", "olfaction", search=SearchConfig(time_budget=8.0),
                           space=space)
     back = load_search_run(save_search_run(run, tmp_path / "r.npz"))
-    for name in ("time", "position", "error", "region_hit", "path", "final_posterior"):
+    for name in ("time", "position", "error", "region_hit", "hpd_level", "path", "final_posterior"):
         np.testing.assert_array_equal(getattr(back, name), getattr(run, name))
     assert (back.found, back.time_to_find, back.config, back.policy) == (run.found, run.time_to_find, run.config,
                                                                          run.policy)
@@ -85,14 +90,10 @@ def test_credible_region_is_the_smallest_set():
         credible_region([0.5, 0.5], 1.0)
 
 
-def test_wilson_paired_and_survival():
+def test_wilson_interval():
     lo, hi = wilson_interval(8, 10)
     assert (round(lo, 4), round(hi, 4)) == (0.4902, 0.9433)
     assert wilson_interval(0, 10)[0] == 0.0 and wilson_interval(10, 10)[1] == 1.0
-    d = paired_difference([10.0, 20.0, 30.0], [12.0, 25.0, 30.0])
-    assert d["mean"] == pytest.approx(-7 / 3) and d["n"] == 3
-    s = survival([10.0, 50.0, 1000.0], [True, True, False], [0.0, 10.0, 49.9, 50.0, 1000.0])
-    np.testing.assert_allclose(s, [1.0, 2 / 3, 2 / 3, 1 / 3, 1 / 3])
 
 
 @pytest.mark.parametrize("kwargs, exc", [
