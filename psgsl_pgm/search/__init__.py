@@ -7,7 +7,7 @@ from ._demo import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
 from ._figures import plot_paths, plot_survival
 from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._loop import SearchConfig, SearchRun, run_closed_loop
-from ._metrics import credible_region, hpd_level, wilson_interval
+from ._metrics import credible_region, hpd_level, paired_difference, survival, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
 from ._policies import POLICIES, SCORES, Decision, Situation, choose, score_per_time, travel_time
 from ._space import FreeSpace
@@ -36,6 +36,7 @@ __all__ = [
     "load_search_run",
     "open_space_benchmark",
     "paired_comparison",
+    "paired_difference",
     "plot_paths",
     "plot_survival",
     "rmst",
@@ -46,6 +47,7 @@ __all__ = [
     "score_per_time",
     "sign_flip_pvalue",
     "summarize_runs",
+    "survival",
     "travel_time",
     "wilson_interval",
     "write_search_outputs",

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from ..experiment._metrics import credible_region, hpd_level
+from ..experiment._metrics import credible_region, hpd_level, mean_ci
 
-__all__ = ["credible_region", "hpd_level", "wilson_interval"]
+__all__ = ["credible_region", "hpd_level", "paired_difference", "survival", "wilson_interval"]
 
 
 def wilson_interval(successes: int, n: int, *, level: float = 0.95) -> list:
@@ -29,3 +29,30 @@ def wilson_interval(successes: int, n: int, *, level: float = 0.95) -> list:
     lo = 0.0 if successes == 0 else max(0.0, centre - half)
     hi = 1.0 if successes == n else min(1.0, centre + half)
     return [float(lo), float(hi)]
+
+
+def paired_difference(a, b, *, level: float = 0.95) -> dict:
+    """Mean of a − b over paired runs (same seeds) with its Student-t interval: ``{"mean", "ci95", "n"}``.
+
+    For quantities that are never capped (errors, spreads, areas). Times censored at a budget need
+    :func:`psgsl_pgm.search.paired_comparison` (RMST difference, sign-flip test) instead.
+    """
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if a.shape != b.shape:
+        raise ValueError(f"paired samples must have the same shape, got {a.shape} and {b.shape}")
+    out = mean_ci(a - b, level=level)
+    out["n"] = int(a.size)
+    return out
+
+
+def survival(times, found, grid) -> np.ndarray:
+    """Fraction of runs not yet found at each time of ``grid``, (len(grid),).
+
+    Runs not found stay in for ever. When every run not found is censored at one budget and ``grid`` lies within
+    it, this is the Kaplan–Meier estimate (:func:`psgsl_pgm.search.kaplan_meier`, which also gives its bands).
+    """
+    t = np.asarray(times, dtype=np.float64)
+    f = np.asarray(found, dtype=bool)
+    g = np.asarray(grid, dtype=np.float64)
+    done = f[None, :] & (t[None, :] <= g[:, None])
+    return 1.0 - done.mean(axis=1)

@@ -172,3 +172,28 @@ def test_paired_comparison_is_the_rmst_difference_and_a_sign_flip_is_caught():
 def test_bad_input_names_the_argument(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_survival_step_function_equals_kaplan_meier_when_censored_at_the_budget():
+    from psgsl_pgm.search import kaplan_meier, survival
+
+    rng = np.random.default_rng(7)
+    budget = 1000.0
+    t = np.minimum(rng.exponential(600.0, size=25).round(), budget)
+    found = t < budget
+    km = kaplan_meier(t, found)
+    grid = np.array(km["t"])
+    np.testing.assert_allclose(survival(t, found, grid), km["survival"], rtol=0, atol=1e-14)
+
+
+def test_paired_difference_is_the_mean_of_differences_with_a_t_interval():
+    from scipy import stats
+
+    from psgsl_pgm.search import paired_difference
+
+    a, b = np.array([1.0, 2.5, 4.0, 3.0]), np.array([0.5, 2.0, 1.0, 3.5])
+    d = a - b
+    out = paired_difference(a, b)
+    half = stats.t.ppf(0.975, 3) * d.std(ddof=1) / 2.0
+    assert out["n"] == 4 and out["mean"] == pytest.approx(d.mean(), rel=1e-15)
+    np.testing.assert_allclose(out["ci95"], [d.mean() - half, d.mean() + half], rtol=1e-12)
