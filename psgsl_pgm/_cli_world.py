@@ -16,7 +16,27 @@ def add_parser(subparsers) -> None:
     check.add_argument("world", help="world file (YAML; see README 'Your own house')")
     check.add_argument("--png", default=None, help="also draw map, rooms, objects, windows, wind and sources here")
     check.add_argument("--seed", type=int, default=0, help="seed of the house (only the built-in house varies)")
+    check.add_argument("--found-radius", type=_metres, default=None, metavar="M",
+                       help="a source counts as found within this distance of it (of its object's footprint); "
+                       "default: the closed loop's, 0.5 m")
+    check.add_argument("--clearance", type=_metres, default=None, metavar="M",
+                       help="the robot's distance from walls, furniture and windows: which cells are drivable "
+                       "(default: the world file's 'clearance', else 0.25 m)")
     check.set_defaults(func=run)
+
+
+def _metres(text: str) -> float:
+    """argparse type: a positive finite number of metres."""
+    import argparse
+    import math
+
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of metres, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of metres, got {text!r}")
+    return v
 
 
 def run(args) -> int:
@@ -40,7 +60,9 @@ def _check(args) -> int:
         if not png.parent.is_dir():
             raise ValueError(f"--png: directory {str(png.parent)!r} does not exist")
     spec = load_world(args.world)
-    summary = spec.summary(seed=args.seed)
+    # a source the robot can never find is refused before anything is printed (one line, exit 2)
+    spec.check_findable(args.seed, found_radius=args.found_radius, clearance=args.clearance)
+    summary = spec.summary(seed=args.seed, found_radius=args.found_radius, clearance=args.clearance)
     print(format_summary(summary))
     if png is not None:
         import matplotlib
@@ -86,9 +108,15 @@ def format_summary(s: dict) -> str:
         lines.append(f"  {w['role']}: ({w['from'][0]:g}, {w['from'][1]:g}) -> ({w['to'][0]:g}, {w['to'][1]:g}), "
                      f"{w['cells']} cells")
     lines.append(f"start: ({s['start'][0]:.2f}, {s['start'][1]:.2f})")
+    if s["sources"]:
+        f = s["findability"]
+        lines.append(f"found within {f['found_radius']:g} m (of the emitting object's footprint); drivable: "
+                     f"{f['clearance']:g} m from walls, furniture and windows")
     for name, src in s["sources"].items():
         x, y = src["position"]
-        lines.append(f"source {name}: ({x:.2f}, {y:.2f}) in {src['room'] or 'no room'}")
+        what = f"object {src['object']} ({src['target_cells']} cells)" if src["object"] else "a point"
+        lines.append(f"source {name}: ({x:.2f}, {y:.2f}) in {src['room'] or 'no room'}, {what}; "
+                     f"{src['geodesic']:.2f} m from the start, nearest drivable cell {src['gap']:.2f} m from it")
     lines.append(f"source region: {s['source_region']}, {s['source_region_area']:.2f} m²")
     o = s["ontology"]
     lines.append(f"ontology: gases {', '.join(o['gases'])}; classes {', '.join(o['classes'])}")

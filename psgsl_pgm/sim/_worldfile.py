@@ -146,14 +146,31 @@ class WorldSpec:
 
     def resolve_source(self, spec, house: House) -> np.ndarray:
         """(2,) position of a source spec (a world source name, an object class or a position)."""
+        return self.source_target(spec, house)[0]
+
+    def source_target(self, spec, house: House):
+        """Where a source spec emits and what counts as finding it.
+
+        Returns
+        -------
+        xy : (2,) ndarray
+            The source position, m (an object's footprint centre when named by class).
+        obj : SceneObject or None
+            The emitting object: the first object of the named class, or the object whose footprint holds the
+            position; None for a position in open space. The closed loop counts the robot as having found the
+            source within ``found_radius`` of this object's footprint (:meth:`SceneObject.mask`).
+        """
+        from ._world import object_at
+
         spec = self.source_spec(spec)
         if isinstance(spec, str):
             objs = [o for o in house.objects if _true_class(o) == canonical_class(spec)]
             if not objs:
                 present = sorted({_true_class(o) for o in house.objects})
                 raise ValueError(f"source class {spec!r} has no object in the house; classes present: {present}")
-            return objs[0].center.copy()
-        return np.asarray(spec, dtype=np.float64)
+            return objs[0].center.copy(), objs[0]
+        xy = np.asarray(spec, dtype=np.float64)
+        return xy, object_at(house, xy)
 
     def make_world(self, seed: int = 0, source="oven", *, warm_up: float = 60.0, **kwargs):
         """The running simulation (:func:`psgsl_pgm.sim.make_world`) of this world for one seed and source."""
@@ -161,16 +178,107 @@ class WorldSpec:
 
         house = self.house(seed)
         spec = self.source_spec(source)
-        if self.fixed_house is not None:  # object classes may be lumped into "other": resolve here
-            spec = self.resolve_source(spec, house)
-        else:
-            spec = spec if isinstance(spec, str) else np.asarray(spec, dtype=np.float64)
+        if self.fixed_house is not None or not isinstance(spec, str):
+            # object classes may be lumped into "other": resolve here, to the emitting object when there is one
+            xy, obj = self.source_target(spec, house)
+            spec = obj if isinstance(spec, str) else xy  # a position stays where it is (make_world finds its object)
         if self.wind["kind"] == "gaden":
             kwargs.setdefault("wind", self.wind["sequence"])
         else:
             kwargs.setdefault("mean_speed", self.wind["speed"])
             kwargs.setdefault("perturbation", self.wind["perturbation"])
         return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
+
+    def findability(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
+                    sources=None) -> dict:
+        """For every source: how far the robot drives to find it, and whether it can at all.
+
+        A source counts as found when the robot comes within ``found_radius`` of it — of the emitting object's
+        footprint cells when there is one (:meth:`source_target`), the closed loop's rule. The robot's cells are
+        :class:`psgsl_pgm.search.FreeSpace`'s (free, not furniture or a window, more than ``clearance`` from
+        each), the geodesic distances its free-space graph's.
+
+        Parameters
+        ----------
+        seed : int
+            The house's seed (only the built-in house varies).
+        found_radius : float, optional, keyword-only
+            m; default: the closed loop's, :class:`psgsl_pgm.search.SearchConfig` (0.5 m).
+        clearance : float, optional, keyword-only
+            m; default: the world file's ``clearance`` (0.25 m unless it says otherwise).
+        sources : sequence, optional, keyword-only
+            Source specs (names, classes or positions); default: the world file's ``sources``.
+
+        Returns
+        -------
+        dict
+            Name -> ``{"object": object name or None, "target_cells": int, "gap": m from the nearest drivable
+            cell to what counts as found, "geodesic": m from the start to the nearest drivable cell within
+            found_radius (inf: none is reachable), "findable": bool}``.
+        """
+        from .._validate import positive
+        from ..search._loop import SearchConfig
+        from ..search._space import FreeSpace
+        from ._camera import Camera
+
+        defaults = SearchConfig()
+        r = defaults.found_radius if found_radius is None else positive(found_radius, "found_radius", "metres")
+        clearance = self.clearance if clearance is None else positive(clearance, "clearance", "metres")
+        house = self.house(seed)
+        g = house.grid
+        space = FreeSpace(house, Camera(), clearance=clearance)
+        if not space.nav.any():
+            raise ValueError(f"{self.path}: no cell of the map is drivable (free, not furniture or a window, more "
+                             f"than clearance {clearance:g} m from each)")
+        d_start = space.distances(space.snap(self.start_for(house))).reshape(g.shape)
+        out = {}
+        for name in (self.sources if sources is None else sources):
+            xy, obj = self.source_target(name, house)
+            centres = g.cell_centres()
+            if obj is not None:  # distance of every cell centre to the footprint's cells (exact on centres)
+                from scipy import ndimage as ndi
+
+                mask = obj.mask(g)
+                dist = ndi.distance_transform_edt(~mask) * g.resolution
+                targets = centres[mask]
+            else:
+                dist = np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1])
+                targets = xy[None, :]
+            gap = float(dist[space.nav].min())
+            # within r: the closed loop's own test, Σ (p − t)² <= r², on the few cells near the boundary
+            near = space.nav & (dist <= r + 1e-6)
+            rows = np.flatnonzero(near)
+            d2 = ((centres.reshape(-1, 2)[rows, None, :] - targets[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
+            near.ravel()[rows[d2 > r * r]] = False
+            cells = len(targets) if obj is not None else 0
+            geo = float(d_start[near].min()) if near.any() else float("inf")
+            out[str(name) if isinstance(name, str) else f"{xy[0]:g},{xy[1]:g}"] = {
+                "object": None if obj is None else obj.name, "target_cells": cells, "gap": gap,
+                "geodesic": geo, "findable": bool(np.isfinite(geo))}
+        return out
+
+    def check_findable(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
+                       sources=None) -> dict:
+        """:meth:`findability`, refusing (ValueError naming the source and the gap) a source never found."""
+        from ..search._loop import SearchConfig
+
+        clearance_used = self.clearance if clearance is None else clearance
+        found_radius = SearchConfig().found_radius if found_radius is None else found_radius
+        result = self.findability(seed, found_radius=found_radius, clearance=clearance, sources=sources)
+        for name, f in result.items():
+            if f["findable"]:
+                continue
+            what = f"the footprint of {f['object']!r}" if f["object"] else "it"
+            if f["gap"] > found_radius:
+                raise ValueError(
+                    f"{self.path}: source {name!r} can never be found: the nearest drivable cell is {f['gap']:.2f} m "
+                    f"from {what}, farther than the found radius {found_radius:g} m (a gap of "
+                    f"{f['gap'] - found_radius:.2f} m); raise found_radius (--found-radius) to at least "
+                    f"{f['gap']:.2f} m, lower clearance (--clearance, now {clearance_used:g} m) or move the source")
+            raise ValueError(
+                f"{self.path}: source {name!r} can never be found: the drivable cells within {found_radius:g} m of "
+                f"{what} are not connected to the start (clearance {clearance_used:g} m)")
+        return result
 
     def windows_of(self, house: House) -> tuple:
         """The windows: as declared, or (built-in house) each window mask's extent as a segment."""
@@ -186,8 +294,9 @@ class WorldSpec:
         return tuple(out)
 
     # --- summary -----------------------------------------------------------------------------------------
-    def summary(self, seed: int = 0) -> dict:
-        """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources."""
+    def summary(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None) -> dict:
+        """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources (with
+        :meth:`findability` under ``found_radius`` and ``clearance``)."""
         house = self.house(seed)
         g = house.grid
         cell_area = g.resolution ** 2
@@ -201,11 +310,14 @@ class WorldSpec:
         start = self.start_for(house)
         region = self.region_mask(house)
         sources = {}
+        from ..search._loop import SearchConfig
+
+        found = self.findability(seed, found_radius=found_radius, clearance=clearance) if self.sources else {}
         for name in self.sources:
             xy = self.resolve_source(name, house)
             room = int(house.room_of(xy))
             sources[name] = {"position": [float(xy[0]), float(xy[1])],
-                             "room": house.room_names[room] if room >= 0 else None}
+                             "room": house.room_names[room] if room >= 0 else None} | found[name]
         ont = self.ontology
         # rooms without p(o | room) in the ontology start from the class prior (no room evidence)
         no_rooms = [r for r in dict.fromkeys(house.room_names) if not any(_same(r, o) for o in ont.rooms)]
@@ -222,6 +334,8 @@ class WorldSpec:
             | ({"snapshots": len(self.wind["sequence"].snapshots)} if self.wind["kind"] == "gaden" else {}),
             "start": [float(start[0]), float(start[1])],
             "sources": sources,
+            "findability": {"found_radius": SearchConfig().found_radius if found_radius is None else found_radius,
+                            "clearance": self.clearance if clearance is None else clearance},
             "source_region": self.source_region if isinstance(self.source_region, str) else "mask",
             "source_region_area": float(region.sum()) * cell_area,
             "ontology": {"classes": list(ont.classes), "gases": list(ont.gases), "rooms": list(ont.rooms),
