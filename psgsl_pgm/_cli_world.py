@@ -121,9 +121,10 @@ def format_summary(s: dict) -> str:
     o = s["ontology"]
     lines.append(f"ontology: gases {', '.join(o['gases'])}; classes {', '.join(o['classes'])}")
     if o["rooms"]:
-        lines.append(f"  p(o | room) for {', '.join(o['rooms'])}"
-                     + (f"; at the class prior: {', '.join(o['rooms_at_class_prior'])}"
-                        if o["rooms_at_class_prior"] else ""))
+        lines.append(f"  p(o | room) for {', '.join(o['rooms'])}")
+        if o["rooms_at_class_prior"]:
+            lines.append(f"warning: p(o | room) omits room(s) {', '.join(o['rooms_at_class_prior'])} of the room map: "
+                         "they start at the class prior (no room evidence)")
     else:
         lines.append("  no p(o | room) (give room_classes): every room starts at the class prior")
     if s["gas"]:

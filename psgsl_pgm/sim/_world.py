@@ -123,7 +123,8 @@ class World:
             p(o | room) — given, beliefs start from the room-category map (the paper's "rooms" variant).
         room_names : sequence of str, optional, keyword-only
             Names of the rows of ``room_table`` (default: the house's room names); matched to the house's
-            rooms ignoring case and spaces, unmatched rooms give no evidence.
+            rooms ignoring case and spaces. A name the house lacks is a ValueError naming the closest room
+            names; a room of the house that the names omit gives no evidence (the class prior).
         layers : int, optional, keyword-only
             Number of voxel layers (a voxel map).
         """
@@ -132,6 +133,13 @@ class World:
             shape = self.house.shape if layers is None else self.house.shape + (int(layers),)
             return SemanticMap.from_prior(shape, class_prior, classes)
         names = self.house.room_names if room_names is None else tuple(room_names)
+        if room_names is not None:  # a misspelt row would leave the house's room at the class prior silently
+            from .._class_maps import unknown_names
+            from ._classes import match_names
+
+            missing = [n for n, i in zip(names, match_names(names, self.house.room_names)) if i < 0]
+            if missing:
+                raise ValueError(f"room_names: {unknown_names(missing, self.house.room_names, 'room', 'the house')}")
         labels = reindex(self.house.room_labels, self.house.room_names, names)
         return SemanticMap.from_rooms(labels, room_table, class_prior, classes, layers=layers)
 

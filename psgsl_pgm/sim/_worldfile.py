@@ -13,6 +13,9 @@ A world file names the files a GSL lab already has; relative paths resolve again
     source_region: rooms         # where a source may be: rooms (default), free, or a mask image (white = may)
     semantic_map: beliefs.npz    # optional: a mapper's class beliefs instead of the simulated camera
                                  # (.npy/.npz dense beliefs or Voxeland's instance-map JSON)
+    other_classes: error         # optional: a semantic_map class the ontology lacks is an error (default), or
+                                 # "lump": added to "other" (a mapper with more classes than the ontology)
+    clearance: 0.25              # optional: the robot's distance from walls, furniture and windows, m
     wind:                        # potential flow between windows ...
       speed: 0.2                 # mean speed, m/s
       perturbation: 0.3          # optional: slow eddies, fraction of speed (default 0.3)
@@ -57,7 +60,7 @@ from ._rosmap import load_ros_map
 __all__ = ["WorldSpec", "default_world", "load_world", "navigable"]
 
 _KEYS = ("map", "resolution", "rooms", "objects", "ontology", "room_classes", "gas", "source_region",
-         "semantic_map", "wind", "start", "sources", "builtin", "clearance")
+         "semantic_map", "wind", "start", "sources", "builtin", "clearance", "other_classes")
 _WIND_POTENTIAL = ("speed", "perturbation", "windows")
 _WIND_GADEN = ("gaden_csv", "height", "period", "windows")
 _REGIONS = ("rooms", "free")
@@ -474,18 +477,41 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
     if "semantic_map" in data:
 
         p = _file(wpath, data, "semantic_map")
+        lump = data.get("other_classes", "error")
+        if lump not in ("error", "lump"):
+            raise ValueError(f"{where}: key 'other_classes' must be 'error' or 'lump', got {lump!r}")
         try:
-            beliefs = read_class_beliefs(p, ontology.classes, grid=house.grid, class_prior=ontology.class_prior)
+            beliefs = read_class_beliefs(p, ontology.classes, grid=house.grid, class_prior=ontology.class_prior,
+                                         other_classes=lump)
         except (ValueError, TypeError) as exc:
             raise _inner(where, "semantic_map", exc) from None
         if beliefs.shape[:2] != house.grid.shape:
             raise ValueError(f"{where}: key 'semantic_map': beliefs of shape {beliefs.shape} do not cover the "
                              f"working grid {house.grid.shape}")
 
+    if "other_classes" in data and "semantic_map" not in data:
+        raise ValueError(f"{where}: key 'other_classes' applies to a 'semantic_map', and the file names none")
+    if house is not None and data["ontology"] != "house" and ontology.rooms:
+        _check_rooms(where, "room_classes" if "room_classes" in data else "ontology", ontology.rooms, house,
+                     data["rooms"])
+
     spec = WorldSpec(wpath, ontology, gas, wind, start, sources, region_value, beliefs, windows, house, builtin,
                      clearance, object_classes, map_path)
     _check_positions(where, spec, probe)
     return spec
+
+
+def _check_rooms(where: str, key: str, rooms, house: House, room_map) -> None:
+    """Every room of p(o | room) must be a room of the room map (case and spaces ignored): a misspelt room
+    would leave the map's room at the class prior without a word. Rooms of the map the table omits entirely
+    start at the class prior (``world check`` warns)."""
+    from .._class_maps import unknown_names
+    from ._classes import match_names
+
+    missing = [r for r, i in zip(rooms, match_names(rooms, house.room_names)) if i < 0]
+    if missing:
+        text = unknown_names(missing, house.room_names, "room", f"the room map {room_map}")
+        raise ValueError(f"{where}: key '{key}': p(o | room) is given for {'a ' if len(missing) == 1 else ''}{text}")
 
 
 def _load_house(wpath: Path, where: str, data: dict, ontology):

@@ -29,8 +29,18 @@ def test_npz_columns_matched_by_name_unlisted_into_other(tmp_path):
     rng = np.random.default_rng(1)
     p = rng.dirichlet(np.ones(4), size=(3, 2))
     np.savez(tmp_path / "b.npz", probs=p, classes=np.array(["Microwave", "bed", "stove", "background"]))
-    got = read_class_beliefs(tmp_path / "b.npz", CLASSES)
+    # a class the ontology lacks is refused, naming the closest known names, unless lumped knowingly
+    with pytest.raises(ValueError, match=r"b\.npz: array 'classes': class the ontology does not list: 'bed' "
+                                         r"\(known: oven, microwave, other\); .*other_classes=\"lump\""):
+        read_class_beliefs(tmp_path / "b.npz", CLASSES)
+    got = read_class_beliefs(tmp_path / "b.npz", CLASSES, other_classes="lump")
     np.testing.assert_allclose(got, np.stack([p[..., 2], p[..., 0], p[..., 1] + p[..., 3]], -1), rtol=1e-12)
+    # background is part of "other" without lumping: stove (an alias of oven), microwave, background
+    np.savez(tmp_path / "e.npz", probs=p[..., :3] / p[..., :3].sum(-1, keepdims=True),
+             classes=np.array(["background", "stove", "microwave"]))
+    q = p[..., :3] / p[..., :3].sum(-1, keepdims=True)
+    np.testing.assert_allclose(read_class_beliefs(tmp_path / "e.npz", CLASSES),
+                               np.stack([q[..., 1], q[..., 2], q[..., 0]], -1), rtol=1e-12)
     np.savez(tmp_path / "c.npz", probs=p)
     with pytest.raises(ValueError, match=r"c\.npz: an \.npz of class beliefs needs arrays 'probs' and 'classes'"):
         read_class_beliefs(tmp_path / "c.npz", CLASSES)
@@ -55,7 +65,9 @@ def test_voxeland_dirichlet_means_in_boxes_prior_elsewhere(tmp_path):
         "2": {"bbox": {"center": [2.0, 1.5, 0.5], "size": [0.5, 0.5, 0.5]},
               "results": {"oven": 9.0}, "n_observations": 0},  # never observed: no evidence
     })
-    b = read_class_beliefs(path, CLASSES, grid=grid, class_prior=PRIOR)
+    with pytest.raises(ValueError, match=r"key 'instances\.0\.results': class the ontology does not list: 'chair'"):
+        read_class_beliefs(path, CLASSES, grid=grid, class_prior=PRIOR)
+    b = read_class_beliefs(path, CLASSES, grid=grid, class_prior=PRIOR, other_classes="lump")
     assert b.shape == (4, 5, 2, 3)  # layers of 0.5 m from z = 0 to 1
     inst0 = np.array([6.0, 2.0, 2.0]) / 10  # chair -> other
     for r, c in ((1, 1), (1, 2), (2, 1), (2, 2)):  # cells whose centre lies in box 0 (x, y in [0.25, 1.25])
@@ -69,7 +81,7 @@ def test_voxeland_dirichlet_means_in_boxes_prior_elsewhere(tmp_path):
         "a": {"bbox": {"center": [0.25, 0.25, 0.25], "size": [0.5, 0.5, 0.5]}, "results": {"oven": 1.0},
               "n_observations": 1},
         "b": {"bbox": {"center": [0.25, 0.25, 0.25], "size": [0.5, 0.5, 0.5]}, "results": {"microwave": 3.0},
-              "n_observations": 1}}}, CLASSES, grid=grid, class_prior=PRIOR)
+              "n_observations": 1}}}, CLASSES, grid=grid, class_prior=PRIOR, other_classes="lump")
     np.testing.assert_allclose(both[0, 0, 0], [0.25, 0.75, 0.0], rtol=1e-12)
     # the voxel columns reduce to cells (Sec. "Voxelized Scene Representations")
     s = semantic_source_probability(b, [0.6, 0.3, 0.1], PRIOR, column_axis=2)
