@@ -160,28 +160,28 @@ def _class_index(where, names, classes, other_classes: str = "error") -> list:
         out.append(lookup.get(c, lookup[OTHER]))
     unknown = [n for n in names if canonical_class(n) not in lookup]
     if unknown and other_classes == "error":
-        raise ValueError(f"{where}: {unknown_names(unknown, classes, 'class', 'the ontology')}; to add classes "
-                         f"the ontology does not list to '{OTHER}' knowingly, pass other_classes=\"lump\" "
-                         "(psgsl estimate --other-classes)")
+        text = unknown_names(unknown, classes, "class", "the ontology does not list")
+        raise ValueError(f"{where}: {text}; to add such classes to '{OTHER}' knowingly, pass "
+                         "other_classes=\"lump\" (psgsl estimate --other-classes; world file: other_classes: lump)")
     return out
 
 
-def unknown_names(unknown, known, what: str, owner: str) -> str:
-    """``"'ovne' — did you mean 'oven'?"``-style text for names that ``owner`` lacks (difflib's closest)."""
+def unknown_names(unknown, known, what: str, clause: str, *, listed: str | None = None) -> str:
+    """``"class the ontology does not list: 'ovne' — did you mean 'oven'? (known: ...)"`` for names absent from
+    ``known`` (difflib's closest, then the same ignoring case and spaces); ``listed`` replaces the known list."""
     known = [str(k) for k in known]
     parts = []
     for n in unknown:
-        close = difflib.get_close_matches(str(n), known, n=3, cutoff=0.6)
+        close = difflib.get_close_matches(str(n), known, n=2, cutoff=0.6)
         if not close:  # case and spacing: "living room" vs "LivingRoom"
             key = {"".join(ch for ch in k.lower() if ch.isalnum()): k for k in known}
-            close = difflib.get_close_matches("".join(ch for ch in str(n).lower() if ch.isalnum()), list(key), n=3,
+            close = difflib.get_close_matches("".join(ch for ch in str(n).lower() if ch.isalnum()), list(key), n=2,
                                               cutoff=0.6)
             close = [key[c] for c in close]
         hint = f" — did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         parts.append(f"{n!r}{hint}")
-    s = "es" if what.endswith("s") else "s"
-    head = f"{what}{s if len(unknown) > 1 else ''} {owner} does not list: "
-    return head + "; ".join(parts) + f" (known: {', '.join(known)})"
+    plural = ("es" if what.endswith("s") else "s") if len(unknown) > 1 else ""
+    return f"{what}{plural} {clause}: " + "; ".join(parts) + f" (known: {listed or ', '.join(known)})"
 
 
 def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Voxeland map",

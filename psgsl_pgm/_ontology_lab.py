@@ -138,11 +138,12 @@ def lab_room_table(classes, room_data: dict, where: str):
     from ._coco import COCO_CLASSES
 
     known = list(dict.fromkeys([*classes[:-1], *COCO_CLASSES]))
+    listed = f"the ontology's {', '.join(classes[:-1])} and the 80 COCO classes"
     for room, row in rows.items():  # a class neither the ontology nor COCO names is a typo ('ovne')
         odd = [c for c in row if c not in known]
         if odd:
-            raise ValueError(f"{where}: key 'room_categories.{room}': "
-                             f"{unknown_names(odd, known, 'class', 'neither the ontology nor COCO')}")
+            text = unknown_names(odd, known, "class", "neither the ontology nor COCO names", listed=listed)
+            raise ValueError(f"{where}: key 'room_categories.{room}': {text}")
     table = np.zeros((len(rows), k))
     for r, row in enumerate(rows.values()):
         total = sum(row.values())

@@ -139,7 +139,8 @@ class World:
 
             missing = [n for n, i in zip(names, match_names(names, self.house.room_names)) if i < 0]
             if missing:
-                raise ValueError(f"room_names: {unknown_names(missing, self.house.room_names, 'room', 'the house')}")
+                text = unknown_names(missing, self.house.room_names, "room", "the house does not have")
+                raise ValueError(f"room_names: {text}")
         labels = reindex(self.house.room_labels, self.house.room_names, names)
         return SemanticMap.from_rooms(labels, room_table, class_prior, classes, layers=layers)
 

@@ -510,7 +510,7 @@ def _check_rooms(where: str, key: str, rooms, house: House, room_map) -> None:
 
     missing = [r for r, i in zip(rooms, match_names(rooms, house.room_names)) if i < 0]
     if missing:
-        text = unknown_names(missing, house.room_names, "room", f"the room map {room_map}")
+        text = unknown_names(missing, house.room_names, "room", f"the room map {room_map} does not have")
         raise ValueError(f"{where}: key '{key}': p(o | room) is given for {'a ' if len(missing) == 1 else ''}{text}")
 
 
