@@ -175,7 +175,7 @@ def _estimate(args) -> int:
                           f"{olfactory.shape}")
     check_distribution(as_float_array(class_probs, "--class-probs"), "--class-probs (p(o_c | z_c) per cell)")
     olf = check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
-    check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g), over all cells)", olf.dtype)
+    check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g))", olf.dtype, over="over all cells")
     semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
                                            column_axis=2 if voxels else None)  # voxel columns -> cells
     posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
