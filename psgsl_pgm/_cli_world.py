@@ -137,8 +137,10 @@ def format_summary(s: dict) -> str:
 def plot_world(spec, *, seed: int = 0):
     """Figure of a world: rooms, walls, objects, windows, wind arrows, start and sources (axes in metres)."""
     import matplotlib.pyplot as plt
+    from matplotlib import transforms
 
     from .sim import plot_house, potential_flow
+    from .sim._plot import LABEL_BOX, declutter
 
     house = spec.house(seed)
     if spec.wind["kind"] == "gaden":
@@ -154,14 +156,22 @@ def plot_world(spec, *, seed: int = 0):
                 label=win["role"])
     start = spec.start_for(house)
     ax.plot(*start, marker="o", color="white", mec="k", ms=8, ls="none", label="start")
+    at: dict = {}  # sources at one position share one label ("B1, oven")
     for name in spec.sources:
         x, y = spec.resolve_source(name, house)
-        ax.plot(x, y, marker="*", color="red", mec="k", ms=14, ls="none")
-        ax.annotate(name, (x, y), xytext=(4, 4), textcoords="offset points", fontsize=8, color="darkred")
-    handles, labels = ax.get_legend_handles_labels()
-    uniq = dict(zip(labels, handles))
-    if uniq:
-        ax.legend(uniq.values(), uniq.keys(), loc="upper right", fontsize=8, framealpha=0.8)
+        at.setdefault((round(float(x), 6), round(float(y), 6)), []).append(str(name))
+    labels = []
+    for (x, y), names in at.items():
+        ax.plot(x, y, marker="*", color="red", mec="k", ms=14, ls="none", zorder=7)
+        shift = transforms.offset_copy(ax.transData, fig=fig, x=6, y=6, units="points")
+        labels.append(ax.text(x, y, ", ".join(names), transform=shift, fontsize=8, color="darkred",
+                              bbox=LABEL_BOX, zorder=8, clip_on=True))
+    handles, names = ax.get_legend_handles_labels()
+    uniq = dict(zip(names, handles))
+    if uniq:  # below the map, where it covers nothing
+        fig.legend(uniq.values(), uniq.keys(), loc="outside lower center", ncols=len(uniq), fontsize=8)
     ax.set_title(f"{Path(str(spec.path)).name}: {h} x {w} cells of {house.grid.resolution:g} m "
                  f"(stars: sources; arrows: wind)", fontsize=9)
+    # sources first; no label over another, over a source's star or over the start
+    declutter(ax, labels + [t for t in ax.texts if t not in labels], avoid=[*at, tuple(start)])
     return fig
