@@ -111,3 +111,22 @@ def test_search_refuses_before_any_run(flat, tmp_path, capsys):
                  "--seeds", "1", "--out", str(out), "--quiet"]) == 2
     assert "source 'oven' can never be found" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_search_options_reach_the_runs(flat, tmp_path):
+    import json
+
+    (flat / "rp.yaml").write_text("number_classes: 81\nroom_categories:\n  Kitchen: {oven: 0.2}\n"
+                                  "  LivingRoom: {microwave: 0.01}\n")
+    path = _world_file(flat, room_classes="rp.yaml", sources={"oven": "oven"})
+    out = tmp_path / "s"
+    assert main(["search", "--world", str(path), "--found-radius", "0.8", "--clearance", "0.3", "--seeds", "1",
+                 "--policies", "tour", "--variants", "olfaction", "--budget", "5", "--out", str(out), "--quiet",
+                 "--no-figures", "--workers", "1"]) == 0
+    (run,) = sorted((out / "runs").glob("*.npz"))
+    with np.load(run) as z:
+        search = json.loads(str(z["config"]))["search"]
+        geodesic = float(z["geodesic"])
+    assert (search["found_radius"], search["clearance"]) == (0.8, 0.3)
+    f = load_world(path).findability(found_radius=0.8, clearance=0.3)["oven"]
+    assert geodesic == pytest.approx(f["geodesic"], rel=1e-12)
