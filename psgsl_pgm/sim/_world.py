@@ -155,8 +155,11 @@ def _source(house: House, source):
     if isinstance(source, str):
         objs = house.objects_of_class(source)
         if not objs:
-            raise ValueError(f"source class {source!r} has no object in the house; classes present: "
-                             f"{sorted({o.class_name for o in house.objects})}")
+            from ._worldfile import _did_you_mean
+
+            present = sorted({o.class_name for o in house.objects})
+            raise ValueError(f"source class {source!r} has no object in the house{_did_you_mean(source, present)}; "
+                             f"classes present: {present}")
         return objs[0].center, objs[0]
     if isinstance(source, SceneObject):
         if not any(o is source for o in house.objects):

@@ -170,7 +170,8 @@ class WorldSpec:
             objs = [o for o in house.objects if _true_class(o) == canonical_class(spec)]
             if not objs:
                 present = sorted({_true_class(o) for o in house.objects})
-                raise ValueError(f"source class {spec!r} has no object in the house; classes present: {present}")
+                raise ValueError(f"source class {spec!r} has no object in the house{_did_you_mean(spec, present)}; "
+                                 f"classes present: {present}")
             return objs[0].center.copy(), objs[0]
         xy = np.asarray(spec, dtype=np.float64)
         return xy, object_at(house, xy)
@@ -346,6 +347,14 @@ class WorldSpec:
             "gas": self.gas,
             "semantic_map": None if self.class_beliefs is None else list(self.class_beliefs.shape),
         }
+
+
+def _did_you_mean(name: str, known) -> str:
+    """``" — did you mean 'oven'?"`` for the closest of ``known`` (difflib), or ""."""
+    import difflib
+
+    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=2, cutoff=0.6)
+    return f" — did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
 def _same(a: str, b: str) -> bool:
