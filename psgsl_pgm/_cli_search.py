@@ -139,8 +139,10 @@ def _run(args) -> int:
     geometry = {k: v for k, v in (("found_radius", args.found_radius),
                                   ("clearance", args.clearance if spec is None or args.clearance is not None
                                    else spec.clearance)) if v is not None}
-    if spec is not None:  # a source the robot can never find is refused before any run
-        spec.check_findable(0, sources=sources, **geometry)
+    from .sim import default_world
+
+    # a source the robot can never find is refused before any run (the built-in house: its first seed's)
+    (spec if spec is not None else default_world()).check_findable(0, sources=sources, **geometry)
     try:
         search = SearchConfig(time_budget=args.budget, score=args.score, **geometry)
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, range(args.seeds),

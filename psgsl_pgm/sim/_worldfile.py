@@ -220,6 +220,8 @@ class WorldSpec:
             cell to what counts as found, "geodesic": m from the start to the nearest drivable cell within
             found_radius (inf: none is reachable), "findable": bool}``.
         """
+        from scipy import ndimage as ndi
+
         from .._validate import positive
         from ..search._loop import SearchConfig
         from ..search._space import FreeSpace
@@ -240,8 +242,6 @@ class WorldSpec:
             xy, obj = self.source_target(name, house)
             centres = g.cell_centres()
             if obj is not None:  # distance of every cell centre to the footprint's cells (exact on centres)
-                from scipy import ndimage as ndi
-
                 mask = obj.mask(g)
                 dist = ndi.distance_transform_edt(~mask) * g.resolution
                 targets = centres[mask]

@@ -140,3 +140,18 @@ def test_a_furniture_map_with_an_oven_at_b1_gives_found_runs(tmp_path, capsys):
     run = run_closed_loop("B1", 0, "infotaxis", "olfaction", world_spec=spec, config=ExperimentConfig(gas="smoke"))
     assert run.found and run.time_to_find < 1000.0
     assert run.geodesic == pytest.approx(f["geodesic"], rel=1e-12)
+
+
+def test_typos_in_the_labs_files_are_refused(tmp_path, capsys):
+    """The lab's own files with one typo each: world check refuses them in one line, naming the close name."""
+    from psgsl_pgm._cli import main
+
+    rooms = (SHARED / "ObjectProbByRoom.yaml").read_text().replace("  Kitchen:", "  Kitchn:")
+    (tmp_path / "rooms_typo.yaml").write_text(rooms)
+    assert main(["world", "check", str(write_real_world(tmp_path, room_classes="rooms_typo.yaml"))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'Kitchn' — did you mean 'Kitchen'?" in err
+    onto = (SHARED / "ontology.yaml").read_text().replace("Gases:", "Gasses:")
+    (tmp_path / "onto_typo.yaml").write_text(onto)
+    assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_typo.yaml"))]) == 2
+    assert "expected key 'Gases' (the lab's layout" in capsys.readouterr().err
