@@ -185,7 +185,7 @@ def check_sums(sums: np.ndarray, name: str, dtype, *, over: str = "along its las
         where = ""
         if worst is not None:  # plain ints: no numpy reprs in messages
             at = tuple(int(i) for i in np.unravel_index(worst, np.shape(sums)))
-            where = f" at cell {at}"
+            where = f" at cell {at}" + (" (row, col)" if len(at) == 2 else "")
         value = np.asarray(sums).flat[worst] if worst is not None else sums
         raise ValueError(
             f"{name} must sum to 1 {over} (tolerance {tol:g}), got a sum of {float(value)!r}{where}"

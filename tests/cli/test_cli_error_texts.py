@@ -18,7 +18,7 @@ def test_a_bad_cell_is_named_by_row_and_column_without_numpy_reprs(tmp_path, cap
     p[2, 3] = 0.5
     assert _estimate(tmp_path, p, np.full((4, 5), 1 / 20)) == 2
     err = capsys.readouterr().err
-    assert "must sum to 1 along its last axis (tolerance 1e-06), got a sum of 1.5 at cell (2, 3)" in err
+    assert "must sum to 1 along its last axis (tolerance 1e-06), got a sum of 1.5 at cell (2, 3) (row, col)" in err
     assert "np." not in err and "int64" not in err
 
 
