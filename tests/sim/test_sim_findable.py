@@ -9,7 +9,7 @@ from psgsl_pgm import load_world
 from psgsl_pgm._cli import main
 from psgsl_pgm.search import SearchConfig, run_closed_loop
 from psgsl_pgm.search._space import FreeSpace
-from psgsl_pgm.sim import Camera, default_house, make_world
+from psgsl_pgm.sim import Camera, SceneObject, box_footprint, default_house, make_world, save_objects
 
 from .test_sim_worldfile import world_dict, write_house
 
@@ -49,6 +49,12 @@ def test_world_file_sources_carry_their_object(flat):
         assert (None if w.source_object is None else w.source_object.name) == obj, name
     np.testing.assert_array_equal(spec.make_world(0, "B", warm_up=0.0).source, [1.2, 0.7])
     np.testing.assert_allclose(spec.make_world(0, "oven", warm_up=0.0).source, [1.0, 0.6], atol=1e-12)
+    # a class names its object even where a later object (drawn over it) covers the object's centre
+    save_objects([SceneObject("oven", box_footprint((1.0, 0.6), (0.6, 0.6)), (0.0, 0.9)),
+                  SceneObject("microwave", box_footprint((1.0, 0.6), (0.3, 0.3)), (0.9, 1.2))], flat / "o2.yaml")
+    spec = load_world(_world_file(flat, objects="o2.yaml", sources={"oven": "oven", "C": [1.0, 0.6]}))
+    assert spec.make_world(0, "oven", warm_up=0.0).source_object.class_name == "oven"
+    assert spec.make_world(0, "C", warm_up=0.0).source_object.class_name == "microwave"  # the one on top there
 
 
 def test_gap_and_geodesic_against_brute_force_and_the_loop(flat):
