@@ -11,7 +11,7 @@ import yaml  # noqa: E402
 
 from psgsl_pgm import load_world  # noqa: E402
 from psgsl_pgm._cli_world import plot_world  # noqa: E402
-from psgsl_pgm.sim import potential_flow  # noqa: E402
+from psgsl_pgm.sim import potential_flow, save_ros_map  # noqa: E402
 from psgsl_pgm.sim._plot import declutter  # noqa: E402
 
 from .test_sim_worldfile import world_dict, write_house  # noqa: E402
@@ -19,10 +19,14 @@ from .test_sim_worldfile import world_dict, write_house  # noqa: E402
 
 @pytest.fixture
 def figure(tmp_path):
-    write_house(tmp_path)
+    grid, _ = write_house(tmp_path)
+    # the map draws a table in the middle of the kitchen (occupied cells inside the room's mask)
+    c = grid.cell_centres()
+    table = (c[..., 0] > 0.8) & (c[..., 0] < 2.2) & (c[..., 1] > 1.3) & (c[..., 1] < 2.7)
+    save_ros_map(grid.with_occupancy(grid.occupancy | table), tmp_path / "map.yaml")
     # two names for one place (the oven's centre), and a third source elsewhere
     (tmp_path / "w.yaml").write_text(yaml.safe_dump(world_dict(sources={"oven": "oven", "B": [1.0, 0.6],
-                                                                        "S1": [4.0, 1.0]})))
+                                                                        "S1": [4.0, 1.0]}, start=[4.5, 2.0])))
     spec = load_world(tmp_path / "w.yaml")
     fig = plot_world(spec)
     fig.canvas.draw()
