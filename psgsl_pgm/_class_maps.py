@@ -14,10 +14,11 @@ gives p(O_c | z) will do):
       {"instances": {"<id>": {"bbox": {"center": [x, y, z], "size": [sx, sy, sz]},
                               "results": {"<class>": alpha, ...}, "n_observations": n}, ...}}
 
-  Each instance's ``results`` are the concentration parameters α of a Dirichlet over classes; its belief is the
-  Dirichlet mean α / Σα; class names are matched as for ``.npz`` (``other_classes`` likewise). Voxels of the world's grid (cell size = the grid's resolution in x, y and z, layers
-  from the lowest to the highest box) inside an instance's box take that mean; where boxes overlap their α are
-  added (independent evidence about one voxel); voxels in no box — and instances with ``n_observations`` 0 —
+  Each instance's ``results`` are the concentration parameters α of a Dirichlet over classes (names matched as
+  for ``.npz``, ``other_classes`` likewise); its belief is the Dirichlet mean α / Σα. Voxels of the world's grid
+  (cell size = the grid's resolution in x, y and z, layers from the lowest to the highest box) inside an
+  instance's box take that mean; where boxes overlap their α are added (independent evidence about one voxel);
+  voxels in no box — and instances with ``n_observations`` 0 —
   carry no evidence and stay at the class prior. The result is a voxel map (H, W, L, k): the semantic term
   reduces columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene Representations",
   ``semantic_source_probability(..., column_axis=2)``).

@@ -189,7 +189,8 @@ def test_a_misspelt_class_in_room_classes_is_an_error(tmp_path):
     (tmp_path / "o.yaml").write_text(LAB)
     (tmp_path / "r.yaml").write_text(ROOMS.replace("oven: 0.2", "ovne: 0.2"))
     with pytest.raises(ValueError, match=r"r\.yaml: key 'room_categories\.Kitchen': class neither the ontology nor "
-                                         r"COCO names: 'ovne' — did you mean 'oven' or 'orange'\? \(known: the ontology's oven, microwave, "
+                                         r"COCO names: 'ovne' — did you mean 'oven' or 'orange'\? "
+                                         r"\(known: the ontology's oven, microwave, "
                                          r"refrigerator, toilet and the 80 COCO classes\)"):
         Ontology.from_yaml(tmp_path / "o.yaml", room_classes=tmp_path / "r.yaml")
     # COCO names the ontology lacks (bed) and aliases (fridge) are the lab's classes, not typos
