@@ -23,7 +23,8 @@ class gives.
 read as the lab's ``ClassMap::Room::finalize`` does with an occupancy prior of 1 (the values are used as
 p(o | room) directly): a listed class has its value, every class the room does not list gets an equal share
 (1 − Σ listed) / (number_classes − listed), and ``other`` takes what is left (the unlisted classes outside the
-ontology and the background). Rooms the file does not list (and cells outside every room) get the class prior
+ontology and the background). A class in a room row that is neither the ontology's nor a COCO class is a typo
+and an error naming the close names. Rooms the file does not list (and cells outside every room) get the class prior
 — the lab's "unknown" room. The class prior itself becomes 1 / number_classes for every named class, ``other``
 the rest (the lab's ``classPrior``); without a room file it is uniform over the ontology's classes (the lab's
 ``setUpNoRooms``).
