@@ -136,3 +136,14 @@ def test_search_options_reach_the_runs(flat, tmp_path):
     assert (search["found_radius"], search["clearance"]) == (0.8, 0.3)
     f = load_world(path).findability(found_radius=0.8, clearance=0.3)["oven"]
     assert geodesic == pytest.approx(f["geodesic"], rel=1e-12)
+
+
+def test_a_world_without_room_classes_runs_the_closed_loop(flat):
+    """No p(o | room): every room at the class prior, so semantics+rooms is semantics, run for run."""
+    spec = load_world(flat / "world.yaml")
+    assert spec.ontology.rooms == ()
+    runs = [run_closed_loop("oven", 0, "tour", v, world_spec=spec, search=SearchConfig(time_budget=40.0))
+            for v in ("semantics", "semantics+rooms")]
+    np.testing.assert_array_equal(runs[0].final_posterior, runs[1].final_posterior)
+    np.testing.assert_array_equal(runs[0].error, runs[1].error)
+    assert runs[0].n_steps >= 2
