@@ -136,9 +136,8 @@ def _run(args) -> int:
             raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
     sources = [parse_source(s) for s in names]  # ValueError -> one line, exit 2
     config = ExperimentConfig(gas=spec.gas) if spec is not None and spec.gas else ExperimentConfig()
-    geometry = {k: v for k, v in (("found_radius", args.found_radius),
-                                  ("clearance", args.clearance if spec is None or args.clearance is not None
-                                   else spec.clearance)) if v is not None}
+    clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
+    geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}
     from .sim import default_world
 
     # a source the robot can never find is refused before any run (the built-in house: its first seed's)
