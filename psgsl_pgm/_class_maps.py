@@ -5,17 +5,20 @@ gives p(O_c | z) will do):
 
 * ``.npy`` — one float array (..., k) whose last axis is the ontology's classes, in its order;
 * ``.npz`` — arrays ``probs`` (..., k') and ``classes`` (k' names): columns are matched to the ontology's
-  classes by name (COCO alias table, :func:`psgsl_pgm._coco.canonical_class`); columns of classes the ontology
-  does not list are added to ``other`` (the lab's rule);
+  classes by name (COCO alias table, :func:`psgsl_pgm._coco.canonical_class`). A class the ontology does not
+  list is an error naming it and the closest known names (a typo such as ``ovne`` would otherwise move its
+  mass to ``other`` without a word); with ``other_classes="lump"`` such columns are added to ``other``
+  knowingly (the lab's rule). A detector's ``background`` column always belongs to ``other``;
 * ``.json`` — Voxeland's saved instance map (``voxeland_instanceMap.json``)::
 
       {"instances": {"<id>": {"bbox": {"center": [x, y, z], "size": [sx, sy, sz]},
                               "results": {"<class>": alpha, ...}, "n_observations": n}, ...}}
 
-  Each instance's ``results`` are the concentration parameters α of a Dirichlet over classes; its belief is the
-  Dirichlet mean α / Σα. Voxels of the world's grid (cell size = the grid's resolution in x, y and z, layers
-  from the lowest to the highest box) inside an instance's box take that mean; where boxes overlap their α are
-  added (independent evidence about one voxel); voxels in no box — and instances with ``n_observations`` 0 —
+  Each instance's ``results`` are the concentration parameters α of a Dirichlet over classes (names matched as
+  for ``.npz``, ``other_classes`` likewise); its belief is the Dirichlet mean α / Σα. Voxels of the world's grid
+  (cell size = the grid's resolution in x, y and z, layers from the lowest to the highest box) inside an
+  instance's box take that mean; where boxes overlap their α are added (independent evidence about one voxel);
+  voxels in no box — and instances with ``n_observations`` 0 —
   carry no evidence and stay at the class prior. The result is a voxel map (H, W, L, k): the semantic term
   reduces columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene Representations",
   ``semantic_source_probability(..., column_axis=2)``).
@@ -23,6 +26,7 @@ gives p(O_c | z) will do):
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from pathlib import Path
@@ -36,9 +40,22 @@ from ._validate import check_distribution
 __all__ = ["read_class_beliefs", "voxeland_class_beliefs"]
 
 OTHER = "other"
+#: A detector's "no object" class: always part of ``other``.
+BACKGROUND = "background"
+#: What to do with a class the ontology does not list: refuse it (default) or add it to ``other``.
+OTHER_CLASSES = ("error", "lump")
 
 
-def read_class_beliefs(path, classes, *, grid=None, class_prior=None) -> np.ndarray:
+def check_other_classes(value) -> str:
+    """The ``other_classes`` option: ``"error"`` or ``"lump"`` (TypeError / ValueError otherwise)."""
+    if not isinstance(value, str):
+        raise TypeError(f"other_classes must be one of {list(OTHER_CLASSES)}, got {type(value).__name__} {value!r}")
+    if value not in OTHER_CLASSES:
+        raise ValueError(f"other_classes must be one of {list(OTHER_CLASSES)}, got {value!r}")
+    return value
+
+
+def read_class_beliefs(path, classes, *, grid=None, class_prior=None, other_classes: str = "error") -> np.ndarray:
     """Class beliefs from a ``.npy``, ``.npz`` or Voxeland ``.json`` file, in the order of ``classes``.
 
     Parameters
@@ -50,6 +67,9 @@ def read_class_beliefs(path, classes, *, grid=None, class_prior=None) -> np.ndar
         The working grid (``shape``, ``resolution``, ``origin``); required for Voxeland files.
     class_prior : (k,) array_like, optional, keyword-only
         p(o) for voxels without evidence; required for Voxeland files.
+    other_classes : {"error", "lump"}, keyword-only
+        A class name of the file that the ontology lacks: an error naming it and the closest known names
+        (default), or added to ``other`` (``"lump"``, the lab's rule, for a mapper with more classes).
 
     Returns
     -------
@@ -63,6 +83,7 @@ def read_class_beliefs(path, classes, *, grid=None, class_prior=None) -> np.ndar
     """
     p = Path(path)
     classes = tuple(classes)
+    other_classes = check_other_classes(other_classes)
     if not p.is_file():
         raise ValueError(f"{p}: no such class-belief file")
     suffix = p.suffix.lower()
@@ -73,7 +94,8 @@ def read_class_beliefs(path, classes, *, grid=None, class_prior=None) -> np.ndar
             data = json.loads(p.read_text(encoding="utf-8"))
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise ValueError(f"{p}: not a readable JSON file ({exc})") from None
-        return voxeland_class_beliefs(data, classes, grid=grid, class_prior=class_prior, where=str(p))
+        return voxeland_class_beliefs(data, classes, grid=grid, class_prior=class_prior, where=str(p),
+                                      other_classes=other_classes)
     try:
         loaded = load_npy(p, str(p))
     except READ_ERRORS as exc:
@@ -90,7 +112,7 @@ def read_class_beliefs(path, classes, *, grid=None, class_prior=None) -> np.ndar
                 raise ValueError(f"{p}: not a readable .npz array file ({' '.join(str(exc).split())})") from None
         if names.ndim != 1 or names.dtype.kind not in "US":
             raise ValueError(f"{p}: array 'classes' must be a 1-D array of names, got {names.dtype} {names.shape}")
-        return _by_name(p, _real(p, probs), [str(n) for n in names], classes)
+        return _by_name(p, _real(p, probs), [str(n) for n in names], classes, other_classes)
     probs = _real(p, loaded)
     if probs.ndim < 2 or probs.shape[-1] != len(classes):
         raise ValueError(f"{p}: class beliefs must have shape (..., {len(classes)}) for the classes {list(classes)}, "
@@ -113,21 +135,23 @@ def _checked(p: Path, probs: np.ndarray) -> np.ndarray:
     return probs
 
 
-def _by_name(p: Path, probs: np.ndarray, names, classes) -> np.ndarray:
+def _by_name(p: Path, probs: np.ndarray, names, classes, other_classes: str) -> np.ndarray:
     if probs.ndim < 2 or probs.shape[-1] != len(names):
         raise ValueError(f"{p}: 'probs' must have shape (..., {len(names)}) for its {len(names)} 'classes', got "
                          f"{probs.shape}")
-    index = _class_index(p, names, classes)
+    index = _class_index(f"{p}: array 'classes'", names, classes, other_classes)
     out = np.zeros(probs.shape[:-1] + (len(classes),))
     for j, i in enumerate(index):  # k' columns, not cells
         out[..., i] += probs[..., j]
     return _checked(p, out)
 
 
-def _class_index(where, names, classes) -> list:
+def _class_index(where, names, classes, other_classes: str = "error") -> list:
+    """Column of each name among ``classes`` (COCO aliases matched); unknown names refused or sent to ``other``."""
     lookup = {canonical_class(c): i for i, c in enumerate(classes)}
     if OTHER not in lookup:
         raise ValueError(f"{where}: the ontology's classes {list(classes)} have no '{OTHER}'")
+    lookup.setdefault(BACKGROUND, lookup[OTHER])  # a detector's background is part of "other" (the lab's rule)
     out, seen = [], set()
     for n in names:
         c = canonical_class(n)
@@ -135,10 +159,34 @@ def _class_index(where, names, classes) -> list:
             raise ValueError(f"{where}: class {n!r} appears twice (aliases included)")
         seen.add(c)
         out.append(lookup.get(c, lookup[OTHER]))
+    unknown = [n for n in names if canonical_class(n) not in lookup]
+    if unknown and other_classes == "error":
+        text = unknown_names(unknown, classes, "class", "the ontology does not list")
+        raise ValueError(f"{where}: {text}; to add such classes to '{OTHER}' knowingly, pass "
+                         "other_classes=\"lump\" (psgsl estimate --other-classes; world file: other_classes: lump)")
     return out
 
 
-def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Voxeland map") -> np.ndarray:
+def unknown_names(unknown, known, what: str, clause: str, *, listed: str | None = None) -> str:
+    """``"class the ontology does not list: 'ovne' — did you mean 'oven'? (known: ...)"`` for names absent from
+    ``known`` (difflib's closest, then the same ignoring case and spaces); ``listed`` replaces the known list."""
+    known = [str(k) for k in known]
+    parts = []
+    for n in unknown:
+        close = difflib.get_close_matches(str(n), known, n=2, cutoff=0.6)
+        if not close:  # case and spacing: "living room" vs "LivingRoom"
+            key = {"".join(ch for ch in k.lower() if ch.isalnum()): k for k in known}
+            close = difflib.get_close_matches("".join(ch for ch in str(n).lower() if ch.isalnum()), list(key), n=2,
+                                              cutoff=0.6)
+            close = [key[c] for c in close]
+        hint = f" — did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        parts.append(f"{n!r}{hint}")
+    plural = ("es" if what.endswith("s") else "s") if len(unknown) > 1 else ""
+    return f"{what}{plural} {clause}: " + "; ".join(parts) + f" (known: {listed or ', '.join(known)})"
+
+
+def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Voxeland map",
+                           other_classes: str = "error") -> np.ndarray:
     """Voxel class beliefs (H, W, L, k) from a parsed Voxeland instance map (see the module docstring).
 
     Parameters
@@ -151,6 +199,8 @@ def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Vo
     class_prior : (k,) array_like, keyword-only
     where : str, keyword-only
         Name for messages.
+    other_classes : {"error", "lump"}, keyword-only
+        A class the ontology lacks: refused, naming the closest known names (default), or added to ``other``.
 
     Returns
     -------
@@ -158,6 +208,7 @@ def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Vo
         Dirichlet means inside boxes, the prior elsewhere. Cost: O(H · W · L · k) memory, one slice update per
         instance.
     """
+    other_classes = check_other_classes(other_classes)
     prior = np.asarray(class_prior, dtype=np.float64)
     if prior.shape != (len(classes),):
         raise ValueError(f"class_prior must have shape ({len(classes)},), got {prior.shape}")
@@ -191,7 +242,7 @@ def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Vo
             raise ValueError(f"{where}: key '{key}.results' must map classes to Dirichlet alphas, got {res!r}")
         names = list(res)
         alphas = np.zeros(len(classes))
-        for j, name in zip(_class_index(f"{where}: key '{key}.results'", names, classes), names):
+        for j, name in zip(_class_index(f"{where}: key '{key}.results'", names, classes, other_classes), names):
             a = res[name]
             if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a) or a < 0:
                 raise ValueError(f"{where}: key '{key}.results.{name}' must be a finite alpha >= 0, got {a!r}")

@@ -180,7 +180,7 @@ def _estimate(args) -> int:
                           f"{olfactory.shape}")
     check_distribution(as_float_array(class_probs, "--class-probs"), "--class-probs (p(o_c | z_c) per cell)")
     olf = check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
-    check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g), over all cells)", olf.dtype)
+    check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g))", olf.dtype, over="over all cells")
     semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
                                            column_axis=2 if voxels else None)  # voxel columns -> cells
     posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
@@ -205,7 +205,8 @@ def _read_beliefs(args, ontology):
         grid = coarsen_occupancy(fine, coarsen_factor(fine.resolution, res, where="--resolution"))
     elif Path(args.class_probs).suffix.lower() == ".json":
         raise _UsageError("--class-probs: a Voxeland instance map (.json) needs --map (the ROS map it is read onto)")
-    return read_class_beliefs(args.class_probs, ontology.classes, grid=grid, class_prior=ontology.class_prior)
+    return read_class_beliefs(args.class_probs, ontology.classes, grid=grid, class_prior=ontology.class_prior,
+                              other_classes="lump" if args.other_classes else "error")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -255,6 +256,9 @@ def build_parser() -> argparse.ArgumentParser:
     est.add_argument("--map", default=None, help="ROS map YAML whose grid a Voxeland .json is read onto")
     est.add_argument("--resolution", type=float, default=None, help="working cell size for --map, m "
                      "(default: the map's)")
+    est.add_argument("--other-classes", action="store_true",
+                     help="add classes of an .npz/.json that the ontology does not list to 'other' (default: such a "
+                     "class is an error naming the closest known names)")
     est.add_argument("--olfactory", required=True, help=".npy (...): p(s | g) per cell")
     est.add_argument("--gas", default=None, help="gas name (default: the ontology's only gas)")
     est.add_argument("--out", required=True, help="file to write p(s | g, z) to, in .npy format, at exactly this path")

@@ -43,6 +43,12 @@ def add_parser(subparsers):
     p.add_argument("--score", choices=SCORES, default="per-time",
                    help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
                    "(default: %(default)s)")
+    p.add_argument("--found-radius", type=positive_float, default=None, metavar="M",
+                   help="the source is found within this distance of it (of its object's footprint), m "
+                   "(default: 0.5)")
+    p.add_argument("--clearance", type=positive_float, default=None, metavar="M",
+                   help="the robot's distance from walls, furniture and windows, m (default: the world file's "
+                   "'clearance', else 0.25)")
     p.add_argument("--workers", type=worker_count, default=workers,
                    help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     add_scheduler_argument(p)
@@ -136,8 +142,14 @@ def _run(args) -> int:
             raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
     sources = [parse_source(s) for s in names]  # ValueError -> one line, exit 2
     config = ExperimentConfig(gas=spec.gas) if spec is not None and spec.gas else ExperimentConfig()
+    clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
+    geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}
+    from .sim import default_world
+
+    # a source the robot can never find is refused before any run (in the first seed's house)
+    (spec if spec is not None else default_world()).check_findable(seeds[0], sources=sources, **geometry)
     try:
-        search = SearchConfig(time_budget=args.budget, score=args.score)
+        search = SearchConfig(time_budget=args.budget, score=args.score, **geometry)
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, seeds,
                                     out=args.out, workers=args.workers, search=search, config=config,
                                     progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler,

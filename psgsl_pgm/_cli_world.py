@@ -16,7 +16,27 @@ def add_parser(subparsers) -> None:
     check.add_argument("world", help="world file (YAML; see README 'Your own house')")
     check.add_argument("--png", default=None, help="also draw map, rooms, objects, windows, wind and sources here")
     check.add_argument("--seed", type=int, default=0, help="seed of the house (only the built-in house varies)")
+    check.add_argument("--found-radius", type=_metres, default=None, metavar="M",
+                       help="a source counts as found within this distance of it (of its object's footprint); "
+                       "default: the closed loop's, 0.5 m")
+    check.add_argument("--clearance", type=_metres, default=None, metavar="M",
+                       help="the robot's distance from walls, furniture and windows: which cells are drivable "
+                       "(default: the world file's 'clearance', else 0.25 m)")
     check.set_defaults(func=run)
+
+
+def _metres(text: str) -> float:
+    """argparse type: a positive finite number of metres."""
+    import argparse
+    import math
+
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of metres, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of metres, got {text!r}")
+    return v
 
 
 def run(args) -> int:
@@ -40,7 +60,9 @@ def _check(args) -> int:
         if not png.parent.is_dir():
             raise ValueError(f"--png: directory {str(png.parent)!r} does not exist")
     spec = load_world(args.world)
-    summary = spec.summary(seed=args.seed)
+    # a source the robot can never find is refused before anything is printed (one line, exit 2)
+    spec.check_findable(args.seed, found_radius=args.found_radius, clearance=args.clearance)
+    summary = spec.summary(seed=args.seed, found_radius=args.found_radius, clearance=args.clearance)
     print(format_summary(summary))
     if png is not None:
         import matplotlib
@@ -86,16 +108,23 @@ def format_summary(s: dict) -> str:
         lines.append(f"  {w['role']}: ({w['from'][0]:g}, {w['from'][1]:g}) -> ({w['to'][0]:g}, {w['to'][1]:g}), "
                      f"{w['cells']} cells")
     lines.append(f"start: ({s['start'][0]:.2f}, {s['start'][1]:.2f})")
+    if s["sources"]:
+        f = s["findability"]
+        lines.append(f"found within {f['found_radius']:g} m (of the emitting object's footprint); drivable: "
+                     f"{f['clearance']:g} m from walls, furniture and windows")
     for name, src in s["sources"].items():
         x, y = src["position"]
-        lines.append(f"source {name}: ({x:.2f}, {y:.2f}) in {src['room'] or 'no room'}")
+        what = f"object {src['object']} ({src['target_cells']} cells)" if src["object"] else "a point"
+        lines.append(f"source {name}: ({x:.2f}, {y:.2f}) in {src['room'] or 'no room'}, {what}; "
+                     f"{src['geodesic']:.2f} m from the start, nearest drivable cell {src['gap']:.2f} m from it")
     lines.append(f"source region: {s['source_region']}, {s['source_region_area']:.2f} m²")
     o = s["ontology"]
     lines.append(f"ontology: gases {', '.join(o['gases'])}; classes {', '.join(o['classes'])}")
     if o["rooms"]:
-        lines.append(f"  p(o | room) for {', '.join(o['rooms'])}"
-                     + (f"; at the class prior: {', '.join(o['rooms_at_class_prior'])}"
-                        if o["rooms_at_class_prior"] else ""))
+        lines.append(f"  p(o | room) for {', '.join(o['rooms'])}")
+        if o["rooms_at_class_prior"]:
+            lines.append(f"warning: p(o | room) omits room(s) {', '.join(o['rooms_at_class_prior'])} of the room map: "
+                         "they start at the class prior (no room evidence)")
     else:
         lines.append("  no p(o | room) (give room_classes): every room starts at the class prior")
     if s["gas"]:
@@ -108,8 +137,10 @@ def format_summary(s: dict) -> str:
 def plot_world(spec, *, seed: int = 0):
     """Figure of a world: rooms, walls, objects, windows, wind arrows, start and sources (axes in metres)."""
     import matplotlib.pyplot as plt
+    from matplotlib import transforms
 
     from .sim import plot_house, potential_flow
+    from .sim._plot import LABEL_BOX, declutter
 
     house = spec.house(seed)
     if spec.wind["kind"] == "gaden":
@@ -125,14 +156,22 @@ def plot_world(spec, *, seed: int = 0):
                 label=win["role"])
     start = spec.start_for(house)
     ax.plot(*start, marker="o", color="white", mec="k", ms=8, ls="none", label="start")
+    at: dict = {}  # sources at one position share one label ("B1, oven")
     for name in spec.sources:
         x, y = spec.resolve_source(name, house)
-        ax.plot(x, y, marker="*", color="red", mec="k", ms=14, ls="none")
-        ax.annotate(name, (x, y), xytext=(4, 4), textcoords="offset points", fontsize=8, color="darkred")
-    handles, labels = ax.get_legend_handles_labels()
-    uniq = dict(zip(labels, handles))
-    if uniq:
-        ax.legend(uniq.values(), uniq.keys(), loc="upper right", fontsize=8, framealpha=0.8)
+        at.setdefault((round(float(x), 6), round(float(y), 6)), []).append(str(name))
+    labels = []
+    for (x, y), names in at.items():
+        ax.plot(x, y, marker="*", color="red", mec="k", ms=14, ls="none", zorder=7)
+        shift = transforms.offset_copy(ax.transData, fig=fig, x=6, y=6, units="points")
+        labels.append(ax.text(x, y, ", ".join(names), transform=shift, fontsize=8, color="darkred",
+                              bbox=LABEL_BOX, zorder=8, clip_on=True))
+    handles, names = ax.get_legend_handles_labels()
+    uniq = dict(zip(names, handles))
+    if uniq:  # below the map, where it covers nothing
+        fig.legend(uniq.values(), uniq.keys(), loc="outside lower center", ncols=len(uniq), fontsize=8)
     ax.set_title(f"{Path(str(spec.path)).name}: {h} x {w} cells of {house.grid.resolution:g} m "
                  f"(stars: sources; arrows: wind)", fontsize=9)
+    # sources first; no label over another, over a source's star or over the start
+    declutter(ax, labels + [t for t in ax.texts if t not in labels], avoid=[*at, tuple(start)])
     return fig

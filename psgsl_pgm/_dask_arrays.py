@@ -261,7 +261,7 @@ def _norm_check(parts, *overlaps, m: int, names: tuple, dtypes: tuple):
 
     parts = np.asarray(parts, dtype=np.float64).reshape(-1, 2 + len(names))
     for j, (name, dt) in enumerate(zip(names, dtypes)):
-        check_sums(parts[:, 2 + j].sum(), name, dt)
+        check_sums(parts[:, 2 + j].sum(), name, dt, over="over all cells")
     mx = parts[:, 0].max()
     if not np.isfinite(mx):
         for (i, j), overlap in zip(_pairs(m), overlaps):
@@ -295,13 +295,13 @@ def fuse_dask(*posteriors, prior=None):
             raise ValueError(f"posteriors[{j}] must have the shape of posteriors[0], {first.shape}, got shape "
                              f"{np.shape(p)}")
         arrays.append(_as_dask(p, f"posteriors[{j}]", first))
-        names.append(f"posteriors[{j}] (over all cells)")
+        names.append(f"posteriors[{j}]")
     dtypes = [_float_dtype(a, n) for a, n in zip(arrays, names)]
     out_dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
     extra = []
     if prior is not None:
         extra = [_as_dask(prior, "prior", first).astype(np.float64)]
-        names.append("prior (over all cells)")
+        names.append("prior")
         dtypes.append(np.dtype(np.float64))
     m = len(arrays)
     log_p = da.map_blocks(_log_block, *arrays, *extra, m=m, has_prior=prior is not None, dtype=np.float64)

@@ -77,7 +77,7 @@ def fuse(*posteriors, prior=None):
         if pr.shape != shape:
             raise ValueError(f"prior must have the posteriors' shape {shape}, got {describe(pr)}")
         check_nonnegative(pr, "prior")
-        check_sums(pr.sum(), "prior (over all cells)", pr.dtype)
+        check_sums(pr.sum(), "prior", pr.dtype, over="over all cells")
         pr = np.ascontiguousarray(pr).reshape(-1)
 
     if len(flat) == 2:
@@ -113,7 +113,7 @@ def _check_inputs(arrays, stats) -> None:
     for j, (a, st) in enumerate(zip(arrays, stats)):
         if st[0] > 0 or not np.isfinite(st[1]):
             check_nonnegative(a, f"posteriors[{j}]")  # locates and names the bad entry
-        check_sums(st[1], f"posteriors[{j}] (over all cells)", a.dtype)
+        check_sums(st[1], f"posteriors[{j}]", a.dtype, over="over all cells")
 
 
 def _check_support(zero_support, flat, pr, shape) -> None:

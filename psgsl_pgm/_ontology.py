@@ -228,7 +228,7 @@ class Ontology:
         path = Path(path)
         data = _read_yaml(path, "ontology")
         room_data = None if room_classes is None else _read_yaml(Path(room_classes), "room-classes")
-        from ._ontology_lab import is_lab_format, lab_ontology, lab_room_table
+        from ._ontology_lab import is_lab_format, lab_key_typo, lab_ontology, lab_room_table
 
         if is_lab_format(data):
             try:
@@ -237,6 +237,9 @@ class Ontology:
             except (ValueError, TypeError) as exc:
                 msg = str(exc)
                 raise type(exc)(msg if msg.startswith((str(path), str(room_classes))) else f"{path}: {msg}") from None
+        typo = lab_key_typo(data, sorted(_KEYS))
+        if typo is not None:
+            raise ValueError(f"{path}: {typo}")
         try:
             ont = cls.from_dict(data)
         except (ValueError, TypeError) as exc:

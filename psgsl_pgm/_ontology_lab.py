@@ -23,7 +23,8 @@ class gives.
 read as the lab's ``ClassMap::Room::finalize`` does with an occupancy prior of 1 (the values are used as
 p(o | room) directly): a listed class has its value, every class the room does not list gets an equal share
 (1 − Σ listed) / (number_classes − listed), and ``other`` takes what is left (the unlisted classes outside the
-ontology and the background). Rooms the file does not list (and cells outside every room) get the class prior
+ontology and the background). A class in a room row that is neither the ontology's nor a COCO class is a typo
+and an error naming the close names. Rooms the file does not list (and cells outside every room) get the class prior
 — the lab's "unknown" room. The class prior itself becomes 1 / number_classes for every named class, ``other``
 the rest (the lab's ``classPrior``); without a room file it is uniform over the ontology's classes (the lab's
 ``setUpNoRooms``).
@@ -38,7 +39,7 @@ import numpy as np
 from ._coco import canonical_class
 from ._validate import check_keys, file_field
 
-__all__ = ["is_lab_format", "lab_ontology", "lab_room_table"]
+__all__ = ["is_lab_format", "lab_key_typo", "lab_ontology", "lab_room_table"]
 
 OTHER = "other"
 
@@ -46,6 +47,27 @@ OTHER = "other"
 def is_lab_format(data) -> bool:
     """Whether a parsed YAML document is the lab's ontology layout (top-level ``Gases``)."""
     return isinstance(data, dict) and "Gases" in data
+
+
+def lab_key_typo(data, own_keys) -> str | None:
+    """The message for a lab-layout file whose ``Gases`` key is misspelt (``Gasses``), else None.
+
+    A top-level key closer to the lab's ``Gases`` than to any key of this project's layout (``own_keys``)
+    marks the file as the lab's: it is answered in the lab's keys, not this project's.
+    """
+    import difflib
+
+    if not isinstance(data, dict) or "classes" in data or "gases" in data:
+        return None
+    vocabulary = ["Gases", *own_keys]
+    for key in data:
+        if not isinstance(key, str):
+            continue
+        best = difflib.get_close_matches(key, vocabulary, n=1, cutoff=0.6)
+        if best == ["Gases"] or (not best and key.lower().startswith("gas")):
+            return (f"expected key 'Gases' (the lab's layout: 'Gases: [{{gas: ..., probs: {{class: p, ...}}}}]'), "
+                    f"got {key!r}")
+    return None
 
 
 def _class_row(where: str, key: str, probs) -> dict:
@@ -113,6 +135,16 @@ def lab_room_table(classes, room_data: dict, where: str):
     if k - 1 >= n:
         raise ValueError(f"{where}: key 'number_classes' is {n}, but the ontology names {k - 1} classes besides "
                          "'other'")
+    from ._class_maps import unknown_names
+    from ._coco import COCO_CLASSES
+
+    known = list(dict.fromkeys([*classes[:-1], *COCO_CLASSES]))
+    listed = f"the ontology's {', '.join(classes[:-1])} and the 80 COCO classes"
+    for room, row in rows.items():  # a class neither the ontology nor COCO names is a typo ('ovne')
+        odd = [c for c in row if c not in known]
+        if odd:
+            text = unknown_names(odd, known, "class", "neither the ontology nor COCO names", listed=listed)
+            raise ValueError(f"{where}: key 'room_categories.{room}': {text}")
     table = np.zeros((len(rows), k))
     for r, row in enumerate(rows.values()):
         total = sum(row.values())

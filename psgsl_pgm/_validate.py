@@ -174,17 +174,21 @@ def check_distribution(arr: np.ndarray, name: str, *, axis: int = -1, sums=None)
     return arr
 
 
-def check_sums(sums: np.ndarray, name: str, dtype) -> None:
-    """Refuse normalising sums further than :data:`SUM_RTOL` from 1 (NaN sums are refused too)."""
+def check_sums(sums: np.ndarray, name: str, dtype, *, over: str = "along its last axis") -> None:
+    """Refuse normalising sums further than :data:`SUM_RTOL` from 1 (NaN sums are refused too); ``over`` says
+    what was summed (e.g. ``"over all cells"`` for a map's total)."""
     tol = SUM_RTOL.get(np.dtype(dtype), 1e-6)
     dev = np.abs(np.asarray(sums, dtype=np.float64) - 1.0)
     worst = np.nanargmax(dev) if np.ndim(dev) else None
     worst_dev = dev.flat[worst] if worst is not None else dev
     if not np.all(dev <= tol):
-        where = f" at cell {np.unravel_index(worst, np.shape(sums))}" if worst is not None else ""
+        where = ""
+        if worst is not None:  # plain ints: no numpy reprs in messages
+            at = tuple(int(i) for i in np.unravel_index(worst, np.shape(sums)))
+            where = f" at cell {at}" + (" (row, col)" if len(at) == 2 else "")
         value = np.asarray(sums).flat[worst] if worst is not None else sums
         raise ValueError(
-            f"{name} must sum to 1 along its last axis (tolerance {tol:g}), got a sum of {float(value)!r}{where}"
+            f"{name} must sum to 1 {over} (tolerance {tol:g}), got a sum of {float(value)!r}{where}"
             + ("" if np.isfinite(worst_dev) else " (NaN or inf entries)")
         )
 

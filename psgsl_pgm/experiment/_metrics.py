@@ -47,7 +47,7 @@ def error_and_spread(posteriors, centres, truth):
     if c.size == 0 or not np.isfinite(c).all():
         raise ValueError(f"centres must be non-empty and finite, got {describe(c)}")
     check_nonnegative(p, "posteriors")
-    check_sums(p.reshape(p.shape[:-2] + (-1,)).sum(axis=-1), "posteriors (each over the (H, W) cells)", p.dtype)
+    check_sums(p.reshape(p.shape[:-2] + (-1,)).sum(axis=-1), "posteriors", p.dtype, over="each over its (H, W) cells")
     truth = real_pair(truth, "truth", "an (x, y)", "metres")
     flat = p.reshape(p.shape[:-2] + (-1,))
 

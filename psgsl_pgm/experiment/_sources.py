@@ -55,7 +55,10 @@ def _check(spec, house) -> None:
     if isinstance(spec, str):
         if not house.objects_of_class(spec):
             present = sorted({o.class_name for o in house.objects})
-            raise ValueError(f"source {spec!r} is no object class of the house; classes present: {present}")
+            from ..sim._worldfile import _did_you_mean
+
+            raise ValueError(f"source {spec!r} is no object class of the house{_did_you_mean(spec, present)}; "
+                             f"classes present: {present}")
         return
     grid = house.grid
     x, y = spec

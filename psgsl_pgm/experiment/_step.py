@@ -153,16 +153,21 @@ class VariantPosteriors:
         room_table = room_table / room_table.sum(axis=1, keepdims=True)
         self.mapped = setting.class_beliefs is not None  # a mapper's beliefs replace the simulated camera
         labels = reindex(house.room_labels, house.room_names, ontology.rooms)  # house rooms -> ontology rows
+        has_rooms = len(ontology.rooms) > 0  # without p(o | room) every room is at the class prior
         if self.mapped:
             given = setting.class_beliefs[..., order]
-            factor = room_evidence(labels, room_table, beta)  # p(o | room) / p(o); 1 outside listed rooms
-            if given.ndim == 4:
-                factor = factor[:, :, None, :]
             plain = ClassBeliefMap(given, classes)
-            rooms = ClassBeliefMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
+            if has_rooms:
+                factor = room_evidence(labels, room_table, beta)  # p(o | room) / p(o); 1 outside listed rooms
+                if given.ndim == 4:
+                    factor = factor[:, :, None, :]
+                rooms = ClassBeliefMap(update_class_probs(given, factor), classes)  # p(o | z, room) ∝ p(o | z) p(o | room) / p(o)
+            else:
+                rooms = ClassBeliefMap(given.copy(), classes)
         else:
             plain = ClassBeliefMap.from_prior(house.shape, beta, classes)
-            rooms = ClassBeliefMap.from_rooms(labels, room_table, beta, classes)
+            rooms = ClassBeliefMap.from_rooms(labels, room_table, beta, classes) if has_rooms else \
+                ClassBeliefMap.from_prior(house.shape, beta, classes)
         self.maps = {"semantics": plain, "semantics+rooms": rooms}
         self.model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
                                               diffusivity=config.diffusivity, lifetime=config.lifetime,

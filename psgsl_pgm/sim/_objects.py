@@ -6,8 +6,8 @@ Object-list YAML::
       - class: oven
         position: [x, y]          # footprint centre in metres (a third entry, z, is ignored)
         size: [sx, sy]            # optional box size in metres (default: one cell of the map)
-        yaw: 0.0                  # optional box rotation in radians
-        height: [z_min, z_max]    # optional vertical extent in metres (default [0, 1])
+        yaw: 0.0                  # optional box rotation in radians, counter-clockwise, |yaw| <= 2π
+        height: [z_min, z_max]    # optional vertical extent in metres above the floor (default [0, 1])
         name: oven_1              # optional
       - class: couch
         footprint: [[x0, y0], [x1, y1], [x2, y2], ...]   # polygon, instead of position/size/yaw
@@ -109,6 +109,20 @@ class SceneObject:
 
 
 _KEYS = ("class", "position", "size", "yaw", "height", "name", "footprint")
+_UNITS = {
+    "position": "position: [x, y] of the footprint centre in metres, map frame",
+    "size": "size: [sx, sy] of the box in metres",
+    "yaw": "yaw: the box's rotation in radians, counter-clockwise from the x axis",
+    "height": "height: [z_min, z_max] in metres above the floor, e.g. [0.0, 0.9]",
+}
+
+
+def _unit(read, where, field, value, unit, **kw):
+    """``read(where, field, value, **kw)``, its error ending with the field's units."""
+    try:
+        return read(where, field, value, **kw)
+    except ValueError as exc:
+        raise ValueError(f"{exc} ({unit})") from None
 
 
 def load_objects(yaml_path, *, like: GridMap | None = None, classes=None) -> list[SceneObject]:
@@ -169,15 +183,20 @@ def load_objects(yaml_path, *, like: GridMap | None = None, classes=None) -> lis
         else:
             if "position" not in it:
                 raise ValueError(f"{where}: field '{f}': needs 'position' (with optional 'size', 'yaw') or 'footprint'")
-            pos = number_list(where, f"{f}.position", it["position"], length=(2, 3))
-            size = number_list(where, f"{f}.size", it["size"], length=2) if "size" in it else [cell, cell]
+            pos = _unit(number_list, where, f"{f}.position", it["position"], _UNITS["position"], length=(2, 3))
+            size = _unit(number_list, where, f"{f}.size", it["size"], _UNITS["size"], length=2) if "size" in it \
+                else [cell, cell]
             if min(size) <= 0:
-                raise ValueError(f"{where}: field '{f}.size' must be positive, got {it['size']!r}")
-            yaw = number(where, f"{f}.yaw", it["yaw"]) if "yaw" in it else 0.0
+                raise ValueError(f"{where}: field '{f}.size' must be positive, got {it['size']!r} ({_UNITS['size']})")
+            yaw = _unit(number, where, f"{f}.yaw", it["yaw"], _UNITS["yaw"]) if "yaw" in it else 0.0
+            if abs(yaw) > 2 * np.pi + 1e-9:  # 90 is a rotation in degrees: a silent 90 rad would be wrong
+                raise ValueError(f"{where}: field '{f}.yaw' is {yaw:g}, beyond ±2π ({_UNITS['yaw']}; {yaw:g}° is "
+                                 f"{np.deg2rad(yaw):.4f} rad)")
             fp = box_footprint(pos[:2], size, yaw)
-        z = number_list(where, f"{f}.height", it["height"], length=2) if "height" in it else [0.0, 1.0]
+        z = _unit(number_list, where, f"{f}.height", it["height"], _UNITS["height"], length=2) if "height" in it \
+            else [0.0, 1.0]
         if z[0] >= z[1]:
-            raise ValueError(f"{where}: field '{f}.height' must be [z_min, z_max] with z_min < z_max, got {z}")
+            raise ValueError(f"{where}: field '{f}.height' must have z_min < z_max, got {z} ({_UNITS['height']})")
         name = it.get("name", "")
         if not isinstance(name, str):
             raise ValueError(f"{where}: field '{f}.name' must be a string, got {name!r}")

@@ -16,7 +16,8 @@ import numpy as np
 
 from ._classes import OTHER
 
-__all__ = ["draw_walls", "figure_problems", "map_norm", "object_label_positions", "plot_cell_map", "plot_house"]
+__all__ = ["declutter", "draw_walls", "figure_problems", "map_norm", "object_label_positions", "plot_cell_map",
+           "plot_house"]
 
 
 def _grid_of(house, grid):
@@ -192,10 +193,77 @@ def object_label_positions(house) -> np.ndarray:
     return out
 
 
+#: A text's backing: labels stay readable over walls, furniture and arrows.
+LABEL_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.8}
+
+
 def _label_objects(ax, house, *, colour="black", fontsize=6):
     """Write every object's class name at its :func:`object_label_positions` point (clipped to the axes)."""
-    for o, (x, y) in zip(house.objects, object_label_positions(house)):
-        ax.text(x, y, o.class_name, ha="center", va="center", fontsize=fontsize, color=colour, clip_on=True)
+    def own(o):  # an object lumped into "other" keeps its own class in its name ("bed#bed_4")
+        return o.name.split("#", 1)[0] if o.class_name == OTHER and "#" in o.name else o.class_name
+
+    return [ax.text(x, y, own(o), ha="center", va="center", fontsize=fontsize, color=colour, clip_on=True,
+                    bbox=LABEL_BOX, zorder=5)
+            for o, (x, y) in zip(house.objects, object_label_positions(house))]
+
+
+def declutter(ax, texts, *, avoid=(), marker_size: float = 14.0, tries: int = 12) -> int:
+    """Move texts so that no two overlap: each in turn, by steps of its own height, alternately down and up.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    texts : sequence of matplotlib Text
+        In order of priority (earlier texts stay where they are).
+    avoid : sequence of (x, y), keyword-only
+        Marker positions (data coordinates) that no text may cover.
+    marker_size : float, keyword-only
+        Their size, points.
+    tries : int, keyword-only
+        Positions tried per text before it is left where it overlaps least.
+
+    Returns
+    -------
+    int
+        Texts that still overlap another (0: none).
+    """
+    fig = ax.figure
+    fig.draw_without_rendering()  # final layout: extents in display units
+    renderer = fig.canvas.get_renderer()
+    to_data = ax.transData.inverted()
+    from matplotlib.transforms import Bbox
+
+    half = marker_size / 2 * fig.dpi / 72
+    placed, left = [], 0
+    for px, py in (ax.transData.transform(np.asarray(p, dtype=float)) for p in avoid):
+        placed.append(Bbox([[px - half, py - half], [px + half, py + half]]))
+    for t in texts:  # a handful of labels
+        x0, y0 = t.get_position()
+        box = t.get_window_extent(renderer)
+        step = box.height * 1.05
+        best, best_hits = (x0, y0), None
+        for k in range(tries + 1):
+            dy = 0.0 if k == 0 else step * ((k + 1) // 2) * (1 if k % 2 else -1)
+            base = ax.transData.transform((x0, y0))
+            x, y = to_data.transform((base[0], base[1] + dy))
+            t.set_position((x, y))
+            moved = t.get_window_extent(renderer)
+            hits = sum(moved.overlaps(b) for b in placed)
+            if best_hits is None or hits < best_hits:
+                best, best_hits = (x, y), hits
+            if hits == 0:
+                break
+        t.set_position(best)
+        left += best_hits > 0
+        placed.append(t.get_window_extent(renderer))
+    return left
+
+
+def _nice(v: float) -> float:
+    """1, 2 or 5 × 10^k nearest below ``v`` (> 0): a round reference length."""
+    e = np.floor(np.log10(v))
+    m = v / 10**e
+    return float((5 if m >= 5 else 2 if m >= 2 else 1) * 10**e)
 
 
 def _deepest(mask, centres, target):
@@ -210,9 +278,10 @@ def _deepest(mask, centres, target):
 
 
 def _room_label_positions(house, objects: bool) -> np.ndarray:
-    """(n_rooms, 2) a point on the open floor of each room (off the furniture when it is drawn)."""
+    """(n_rooms, 2) a point on the open floor of each room: off the map's occupied cells (walls and any furniture
+    the map draws) and off the objects when they are drawn; deepest inside that floor."""
     centres = house.grid.cell_centres()
-    open_floor = ~house.furniture if objects and house.objects else np.ones(house.shape, bool)
+    open_floor = house.grid.free & (~house.furniture if objects and house.objects else True)
     out = np.empty((len(house.room_names), 2))
     for i in range(len(house.room_names)):  # one distance transform per room
         room = house.room_labels == i
@@ -239,8 +308,11 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
         Gas source position, drawn as a red star.
     rooms, objects, labels : bool, keyword-only
         Shade rooms; fill object cells by class; write room and object class names (each object's name on
-        its visible part, :func:`object_label_positions`).
+        its visible part, :func:`object_label_positions`; room names on open floor; on a white backing, moved
+        apart by :func:`declutter` where they would overlap).
     wind_stride : int, keyword-only
+        Arrows every this many cells; one scale for all (the 95th-percentile speed spans 90 % of the arrow
+        spacing), stated by a key above the axes.
     colorbar : bool, keyword-only
         Colour bar of ``concentration``.
 
@@ -279,14 +351,23 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
         xy = g.cell_centres()[::wind_stride, ::wind_stride]
         v = wind.velocity[::wind_stride, ::wind_stride]
         keep = g.free[::wind_stride, ::wind_stride]
-        ax.quiver(xy[..., 0][keep], xy[..., 1][keep], v[..., 0][keep], v[..., 1][keep], color="tab:blue",
-                  angles="xy", scale_units="xy", scale=0.5, width=0.002)
+        speed = np.hypot(v[..., 0], v[..., 1])[keep]
+        # one scale for the figure: the 95th-percentile speed spans 90 % of the arrow spacing; a key states it
+        ref = float(np.percentile(speed, 95)) if speed.size and speed.max() > 0 else 1.0
+        spacing = wind_stride * g.resolution
+        q = ax.quiver(xy[..., 0][keep], xy[..., 1][keep], v[..., 0][keep], v[..., 1][keep], color="tab:blue",
+                      angles="xy", scale_units="xy", scale=ref / (0.9 * spacing), width=0.002)
+        key = _nice(ref)
+        ax.quiverkey(q, 0.0, 1.015, key, f"wind {key:g} m/s", labelpos="E", coordinates="axes",
+                     fontproperties={"size": 8})
+    texts = []
     if labels:
         for name, (x, y) in zip(house.room_names, _room_label_positions(house, objects)):
             if np.isfinite(x):
-                ax.text(x, y, name, ha="center", va="center", fontsize=9, alpha=0.6, clip_on=True)
+                texts.append(ax.text(x, y, name, ha="center", va="center", fontsize=9, clip_on=True,
+                                     bbox=LABEL_BOX, zorder=6))
         if objects and house.objects:
-            _label_objects(ax, house)
+            texts += _label_objects(ax, house)
     if source is not None:
         sx, sy = np.asarray(source, dtype=float)[:2]
         ax.plot(sx, sy, marker="*", color="red", markersize=14, markeredgecolor="k")
@@ -294,6 +375,8 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
     ax.set_ylim(ext[2], ext[3])
     ax.set_aspect("equal")
     _label_axes(ax, g)
+    if texts:
+        declutter(ax, texts)  # no label over another
     return ax
 
 

@@ -20,6 +20,7 @@ from ._house import House, default_house
 from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind
+from .._validate import real_pair
 
 __all__ = ["World", "make_world"]
 
@@ -39,7 +40,9 @@ class World:
     source : (2,) ndarray
         Gas source position, metres.
     source_object : SceneObject or None
-        The object that emits, if the source was given as a class name.
+        The object that emits: the one named by class, or the object whose footprint holds the source position
+        (None for a source in open space). The success rule of the closed loop counts its footprint
+        (:meth:`SceneObject.mask`), not only its centre.
     """
 
     def __init__(self, house: House, wind: WindSequence, gas: FilamentModel, *, camera: Camera,
@@ -120,7 +123,8 @@ class World:
             p(o | room) — given, beliefs start from the room-category map (the paper's "rooms" variant).
         room_names : sequence of str, optional, keyword-only
             Names of the rows of ``room_table`` (default: the house's room names); matched to the house's
-            rooms ignoring case and spaces, unmatched rooms give no evidence.
+            rooms ignoring case and spaces. A name the house lacks is a ValueError naming the closest room
+            names; a room of the house that the names omit gives no evidence (the class prior).
         layers : int, optional, keyword-only
             Number of voxel layers (a voxel map).
         """
@@ -129,11 +133,56 @@ class World:
             shape = self.house.shape if layers is None else self.house.shape + (int(layers),)
             return SemanticMap.from_prior(shape, class_prior, classes)
         names = self.house.room_names if room_names is None else tuple(room_names)
+        if room_names is not None:  # a misspelt row would leave the house's room at the class prior silently
+            from .._class_maps import unknown_names
+            from ._classes import match_names
+
+            missing = [n for n, i in zip(names, match_names(names, self.house.room_names)) if i < 0]
+            if missing:
+                text = unknown_names(missing, self.house.room_names, "room", "the house does not have")
+                raise ValueError(f"room_names: {text}")
         labels = reindex(self.house.room_labels, self.house.room_names, names)
         return SemanticMap.from_rooms(labels, room_table, class_prior, classes, layers=layers)
 
     def __repr__(self) -> str:
         return f"World(t={self.time:.1f} s, source={tuple(np.round(self.source, 3))}, {self.gas.n_filaments} filaments)"
+
+
+def _source(house: House, source):
+    """(position (2,), emitting object or None) of a source given by class name, object or position."""
+    from ._objects import SceneObject
+
+    if isinstance(source, str):
+        objs = house.objects_of_class(source)
+        if not objs:
+            from ._worldfile import _did_you_mean
+
+            present = sorted({o.class_name for o in house.objects})
+            raise ValueError(f"source class {source!r} has no object in the house{_did_you_mean(source, present)}; "
+                             f"classes present: {present}")
+        return objs[0].center, objs[0]
+    if isinstance(source, SceneObject):
+        if not any(o is source for o in house.objects):
+            raise ValueError(f"source object {source!r} is not one of the house's objects")
+        return source.center, source
+    xy = real_pair(source, "source", "an (x, y)", "metres")
+    return xy, object_at(house, xy)
+
+
+def object_at(house: House, xy):
+    """The object whose footprint polygon holds the point ``xy`` (m), or None.
+
+    Where footprints overlap (an oven in a countertop), the last in ``house.objects`` — the one the class map
+    shows there (:attr:`House.class_map`: later objects win). A point on the boundary counts as inside.
+    """
+    from matplotlib.path import Path as MplPath
+
+    p = np.asarray(xy, dtype=np.float64)
+    for o in reversed(house.objects):  # a handful of objects
+        # the sign of matplotlib's margin depends on the polygon's orientation: test both, one of them widens
+        if any(MplPath(fp).contains_point(p, radius=1e-9) for fp in (o.footprint, o.footprint[::-1])):
+            return o
+    return None
 
 
 def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean_speed: float = 0.2,
@@ -147,8 +196,10 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
     ----------
     house : House, optional
         Default: ``default_house(seed)``.
-    source : str or (2,) array_like, keyword-only
-        A class name (the source is the centre of the first object of that class) or a position.
+    source : str, SceneObject or (2,) array_like, keyword-only
+        A class name (the source is the centre of the first object of that class), one of ``house.objects``
+        (its centre), or a position in metres. A position inside an object's footprint makes that object
+        the emitting :attr:`World.source_object` (where footprints overlap, the one the class map shows there).
     seed : int, keyword-only
         One seed for everything (house jitter, wind perturbation, filament noise, sensors, detector).
     mean_speed, perturbation : float, keyword-only
@@ -182,14 +233,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         raise ValueError(f"warm_up must be a non-negative number of seconds, got {warm_up!r}")
     ss = np.random.SeedSequence(int(seed))
     wind_seed, gas_seed = (int(s.generate_state(1)[0]) for s in ss.spawn(2))
-    source_object = None
-    if isinstance(source, str):
-        objs = house.objects_of_class(source)
-        if not objs:
-            raise ValueError(f"source class {source!r} has no object in the house; classes present: "
-                             f"{sorted({o.class_name for o in house.objects})}")
-        source_object = objs[0]
-        source = source_object.center
+    source, source_object = _source(house, source)
     if wind is None:
         wind = make_wind(house.grid, house.inlet, house.outlet, mean_speed=mean_speed, perturbation=perturbation,
                          duration=duration, seed=wind_seed)

@@ -13,6 +13,9 @@ A world file names the files a GSL lab already has; relative paths resolve again
     source_region: rooms         # where a source may be: rooms (default), free, or a mask image (white = may)
     semantic_map: beliefs.npz    # optional: a mapper's class beliefs instead of the simulated camera
                                  # (.npy/.npz dense beliefs or Voxeland's instance-map JSON)
+    other_classes: error         # optional: a semantic_map class the ontology lacks is an error (default), or
+                                 # "lump": added to "other" (a mapper with more classes than the ontology)
+    clearance: 0.25              # optional: the robot's distance from walls, furniture and windows, m
     wind:                        # potential flow between windows ...
       speed: 0.2                 # mean speed, m/s
       perturbation: 0.3          # optional: slow eddies, fraction of speed (default 0.3)
@@ -57,7 +60,7 @@ from ._rosmap import load_ros_map
 __all__ = ["WorldSpec", "default_world", "load_world", "navigable"]
 
 _KEYS = ("map", "resolution", "rooms", "objects", "ontology", "room_classes", "gas", "source_region",
-         "semantic_map", "wind", "start", "sources", "builtin", "clearance")
+         "semantic_map", "wind", "start", "sources", "builtin", "clearance", "other_classes")
 _WIND_POTENTIAL = ("speed", "perturbation", "windows")
 _WIND_GADEN = ("gaden_csv", "height", "period", "windows")
 _REGIONS = ("rooms", "free")
@@ -146,14 +149,32 @@ class WorldSpec:
 
     def resolve_source(self, spec, house: House) -> np.ndarray:
         """(2,) position of a source spec (a world source name, an object class or a position)."""
+        return self.source_target(spec, house)[0]
+
+    def source_target(self, spec, house: House):
+        """Where a source spec emits and what counts as finding it.
+
+        Returns
+        -------
+        xy : (2,) ndarray
+            The source position, m (an object's footprint centre when named by class).
+        obj : SceneObject or None
+            The emitting object: the first object of the named class, or the object whose footprint holds the
+            position; None for a position in open space. The closed loop counts the robot as having found the
+            source within ``found_radius`` of this object's footprint (:meth:`SceneObject.mask`).
+        """
+        from ._world import object_at
+
         spec = self.source_spec(spec)
         if isinstance(spec, str):
             objs = [o for o in house.objects if _true_class(o) == canonical_class(spec)]
             if not objs:
                 present = sorted({_true_class(o) for o in house.objects})
-                raise ValueError(f"source class {spec!r} has no object in the house; classes present: {present}")
-            return objs[0].center.copy()
-        return np.asarray(spec, dtype=np.float64)
+                raise ValueError(f"source class {spec!r} has no object in the house{_did_you_mean(spec, present)}; "
+                                 f"classes present: {present}")
+            return objs[0].center.copy(), objs[0]
+        xy = np.asarray(spec, dtype=np.float64)
+        return xy, object_at(house, xy)
 
     def make_world(self, seed: int = 0, source="oven", *, warm_up: float = 60.0, **kwargs):
         """The running simulation (:func:`psgsl_pgm.sim.make_world`) of this world for one seed and source."""
@@ -161,16 +182,107 @@ class WorldSpec:
 
         house = self.house(seed)
         spec = self.source_spec(source)
-        if self.fixed_house is not None:  # object classes may be lumped into "other": resolve here
-            spec = self.resolve_source(spec, house)
-        else:
-            spec = spec if isinstance(spec, str) else np.asarray(spec, dtype=np.float64)
+        if self.fixed_house is not None or not isinstance(spec, str):
+            # object classes may be lumped into "other": resolve here, to the emitting object when there is one
+            xy, obj = self.source_target(spec, house)
+            spec = obj if isinstance(spec, str) else xy  # a position stays where it is (make_world finds its object)
         if self.wind["kind"] == "gaden":
             kwargs.setdefault("wind", self.wind["sequence"])
         else:
             kwargs.setdefault("mean_speed", self.wind["speed"])
             kwargs.setdefault("perturbation", self.wind["perturbation"])
         return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
+
+    def findability(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
+                    sources=None) -> dict:
+        """For every source: how far the robot drives to find it, and whether it can at all.
+
+        A source counts as found when the robot comes within ``found_radius`` of it — of the emitting object's
+        footprint cells when there is one (:meth:`source_target`), the closed loop's rule. The robot's cells are
+        :class:`psgsl_pgm.search.FreeSpace`'s (free, not furniture or a window, more than ``clearance`` from
+        each), the geodesic distances its free-space graph's.
+
+        Parameters
+        ----------
+        seed : int
+            The house's seed (only the built-in house varies).
+        found_radius : float, optional, keyword-only
+            m; default: the closed loop's, :class:`psgsl_pgm.search.SearchConfig` (0.5 m).
+        clearance : float, optional, keyword-only
+            m; default: the world file's ``clearance`` (0.25 m unless it says otherwise).
+        sources : sequence, optional, keyword-only
+            Source specs (names, classes or positions); default: the world file's ``sources``.
+
+        Returns
+        -------
+        dict
+            Name -> ``{"object": object name or None, "target_cells": int, "gap": m from the nearest drivable
+            cell to what counts as found, "geodesic": m from the start to the nearest drivable cell within
+            found_radius (inf: none is reachable), "findable": bool}``.
+        """
+        from scipy import ndimage as ndi
+
+        from .._validate import positive
+        from ..search._loop import SearchConfig
+        from ..search._space import FreeSpace
+        from ._camera import Camera
+
+        defaults = SearchConfig()
+        r = defaults.found_radius if found_radius is None else positive(found_radius, "found_radius", "metres")
+        clearance = self.clearance if clearance is None else positive(clearance, "clearance", "metres")
+        house = self.house(seed)
+        g = house.grid
+        space = FreeSpace(house, Camera(), clearance=clearance)
+        if not space.nav.any():
+            raise ValueError(f"{self.path}: no cell of the map is drivable (free, not furniture or a window, more "
+                             f"than clearance {clearance:g} m from each)")
+        d_start = space.distances(space.snap(self.start_for(house))).reshape(g.shape)
+        out = {}
+        for name in (self.sources if sources is None else sources):
+            xy, obj = self.source_target(name, house)
+            centres = g.cell_centres()
+            if obj is not None:  # distance of every cell centre to the footprint's cells (exact on centres)
+                mask = obj.mask(g)
+                dist = ndi.distance_transform_edt(~mask) * g.resolution
+                targets = centres[mask]
+            else:
+                dist = np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1])
+                targets = xy[None, :]
+            gap = float(dist[space.nav].min())
+            # within r: the closed loop's own test, Σ (p − t)² <= r², on the few cells near the boundary
+            near = space.nav & (dist <= r + 1e-6)
+            rows = np.flatnonzero(near)
+            d2 = ((centres.reshape(-1, 2)[rows, None, :] - targets[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
+            near.ravel()[rows[d2 > r * r]] = False
+            cells = len(targets) if obj is not None else 0
+            geo = float(d_start[near].min()) if near.any() else float("inf")
+            out[str(name) if isinstance(name, str) else f"{xy[0]:g},{xy[1]:g}"] = {
+                "object": None if obj is None else obj.name, "target_cells": cells, "gap": gap,
+                "geodesic": geo, "findable": bool(np.isfinite(geo))}
+        return out
+
+    def check_findable(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
+                       sources=None) -> dict:
+        """:meth:`findability`, refusing (ValueError naming the source and the gap) a source never found."""
+        from ..search._loop import SearchConfig
+
+        clearance_used = self.clearance if clearance is None else clearance
+        found_radius = SearchConfig().found_radius if found_radius is None else found_radius
+        result = self.findability(seed, found_radius=found_radius, clearance=clearance, sources=sources)
+        for name, f in result.items():
+            if f["findable"]:
+                continue
+            what = f"the footprint of {f['object']!r}" if f["object"] else "it"
+            if f["gap"] > found_radius:
+                raise ValueError(
+                    f"{self.path}: source {name!r} can never be found: the nearest drivable cell is {f['gap']:.2f} m "
+                    f"from {what}, farther than the found radius {found_radius:g} m (a gap of "
+                    f"{f['gap'] - found_radius:.2f} m); raise found_radius (--found-radius) to at least "
+                    f"{f['gap']:.2f} m, lower clearance (--clearance, now {clearance_used:g} m) or move the source")
+            raise ValueError(
+                f"{self.path}: source {name!r} can never be found: the drivable cells within {found_radius:g} m of "
+                f"{what} are not connected to the start (clearance {clearance_used:g} m)")
+        return result
 
     def windows_of(self, house: House) -> tuple:
         """The windows: as declared, or (built-in house) each window mask's extent as a segment."""
@@ -186,8 +298,9 @@ class WorldSpec:
         return tuple(out)
 
     # --- summary -----------------------------------------------------------------------------------------
-    def summary(self, seed: int = 0) -> dict:
-        """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources."""
+    def summary(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None) -> dict:
+        """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources (with
+        :meth:`findability` under ``found_radius`` and ``clearance``)."""
         house = self.house(seed)
         g = house.grid
         cell_area = g.resolution ** 2
@@ -201,11 +314,14 @@ class WorldSpec:
         start = self.start_for(house)
         region = self.region_mask(house)
         sources = {}
+        from ..search._loop import SearchConfig
+
+        found = self.findability(seed, found_radius=found_radius, clearance=clearance) if self.sources else {}
         for name in self.sources:
             xy = self.resolve_source(name, house)
             room = int(house.room_of(xy))
             sources[name] = {"position": [float(xy[0]), float(xy[1])],
-                             "room": house.room_names[room] if room >= 0 else None}
+                             "room": house.room_names[room] if room >= 0 else None} | found[name]
         ont = self.ontology
         # rooms without p(o | room) in the ontology start from the class prior (no room evidence)
         no_rooms = [r for r in dict.fromkeys(house.room_names) if not any(_same(r, o) for o in ont.rooms)]
@@ -222,6 +338,8 @@ class WorldSpec:
             | ({"snapshots": len(self.wind["sequence"].snapshots)} if self.wind["kind"] == "gaden" else {}),
             "start": [float(start[0]), float(start[1])],
             "sources": sources,
+            "findability": {"found_radius": SearchConfig().found_radius if found_radius is None else found_radius,
+                            "clearance": self.clearance if clearance is None else clearance},
             "source_region": self.source_region if isinstance(self.source_region, str) else "mask",
             "source_region_area": float(region.sum()) * cell_area,
             "ontology": {"classes": list(ont.classes), "gases": list(ont.gases), "rooms": list(ont.rooms),
@@ -229,6 +347,14 @@ class WorldSpec:
             "gas": self.gas,
             "semantic_map": None if self.class_beliefs is None else list(self.class_beliefs.shape),
         }
+
+
+def _did_you_mean(name: str, known) -> str:
+    """``" — did you mean 'oven'?"`` for the closest of ``known`` (difflib), or ""."""
+    import difflib
+
+    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=2, cutoff=0.6)
+    return f" — did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
 def _same(a: str, b: str) -> bool:
@@ -360,18 +486,41 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
     if "semantic_map" in data:
 
         p = _file(wpath, data, "semantic_map")
+        lump = data.get("other_classes", "error")
+        if lump not in ("error", "lump"):
+            raise ValueError(f"{where}: key 'other_classes' must be 'error' or 'lump', got {lump!r}")
         try:
-            beliefs = read_class_beliefs(p, ontology.classes, grid=house.grid, class_prior=ontology.class_prior)
+            beliefs = read_class_beliefs(p, ontology.classes, grid=house.grid, class_prior=ontology.class_prior,
+                                         other_classes=lump)
         except (ValueError, TypeError) as exc:
             raise _inner(where, "semantic_map", exc) from None
         if beliefs.shape[:2] != house.grid.shape:
             raise ValueError(f"{where}: key 'semantic_map': beliefs of shape {beliefs.shape} do not cover the "
                              f"working grid {house.grid.shape}")
 
+    if "other_classes" in data and "semantic_map" not in data:
+        raise ValueError(f"{where}: key 'other_classes' applies to a 'semantic_map', and the file names none")
+    if house is not None and data["ontology"] != "house" and ontology.rooms:
+        _check_rooms(where, "room_classes" if "room_classes" in data else "ontology", ontology.rooms, house,
+                     data["rooms"])
+
     spec = WorldSpec(wpath, ontology, gas, wind, start, sources, region_value, beliefs, windows, house, builtin,
                      clearance, object_classes, map_path)
     _check_positions(where, spec, probe)
     return spec
+
+
+def _check_rooms(where: str, key: str, rooms, house: House, room_map) -> None:
+    """Every room of p(o | room) must be a room of the room map (case and spaces ignored): a misspelt room
+    would leave the map's room at the class prior without a word. Rooms of the map the table omits entirely
+    start at the class prior (``world check`` warns)."""
+    from .._class_maps import unknown_names
+    from ._classes import match_names
+
+    missing = [r for r, i in zip(rooms, match_names(rooms, house.room_names)) if i < 0]
+    if missing:
+        text = unknown_names(missing, house.room_names, "room", f"the room map {room_map} does not have")
+        raise ValueError(f"{where}: key '{key}': p(o | room) is given for {'a ' if len(missing) == 1 else ''}{text}")
 
 
 def _load_house(wpath: Path, where: str, data: dict, ontology):

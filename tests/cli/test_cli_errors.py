@@ -167,7 +167,8 @@ def no_runs(monkeypatch):
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--sources", "toaster2"], "source 'toaster2' is no object class of the house; classes present: .*'oven'"),
+        (["--sources", "toaster2"], "source 'toaster2' is no object class of the house — did you mean 'toaster'\\?; "
+                                    "classes present: .*'oven'"),
         (["--sources", "100,100"], r"source position \(100, 100\) lies outside the map: x in \[0, 10\]"),
         (["--sources", "0.01,0.01"], r"source position \(0.01, 0.01\) lies in an occupied cell"),
         (["--sources", "1,x"], "a source position must read 'x,y' in metres"),

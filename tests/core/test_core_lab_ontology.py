@@ -169,3 +169,31 @@ def test_duplicate_keys_are_errors_not_last_wins(tmp_path):
                                      "  Kitchen: {oven: 0.1}\n")
     with pytest.raises(ValueError, match=r"r\.yaml: duplicate key 'Kitchen'"):
         Ontology.from_yaml(tmp_path / "o.yaml", room_classes=tmp_path / "r.yaml")
+
+
+def test_a_misspelt_lab_key_is_answered_in_the_labs_keys(tmp_path):
+    (tmp_path / "o.yaml").write_text(LAB.replace("Gases:", "Gasses:"))
+    with pytest.raises(ValueError, match=r"o\.yaml: expected key 'Gases' \(the lab's layout: .*\), got 'Gasses'") as e:
+        Ontology.from_yaml(tmp_path / "o.yaml")
+    assert "classes" not in str(e.value)  # not this project's keys
+    (tmp_path / "p.yaml").write_text(LAB.replace("Gases:", "GASES:"))
+    with pytest.raises(ValueError, match=r"expected key 'Gases'.*got 'GASES'"):
+        Ontology.from_yaml(tmp_path / "p.yaml")
+    # this project's layout with a typo is still answered in this project's keys
+    (tmp_path / "q.yaml").write_text("clases: [oven]\ngases: {smoke: {oven: 1.0}}\n")
+    with pytest.raises(ValueError, match=r"unknown ontology keys \['clases'\]; expected some of \['class_prior', "):
+        Ontology.from_yaml(tmp_path / "q.yaml")
+
+
+def test_a_misspelt_class_in_room_classes_is_an_error(tmp_path):
+    (tmp_path / "o.yaml").write_text(LAB)
+    (tmp_path / "r.yaml").write_text(ROOMS.replace("oven: 0.2", "ovne: 0.2"))
+    with pytest.raises(ValueError, match=r"r\.yaml: key 'room_categories\.Kitchen': class neither the ontology nor "
+                                         r"COCO names: 'ovne' — did you mean 'oven' or 'orange'\? "
+                                         r"\(known: the ontology's oven, microwave, "
+                                         r"refrigerator, toilet and the 80 COCO classes\)"):
+        Ontology.from_yaml(tmp_path / "o.yaml", room_classes=tmp_path / "r.yaml")
+    # COCO names the ontology lacks (bed) and aliases (fridge) are the lab's classes, not typos
+    (tmp_path / "s.yaml").write_text(ROOMS.replace("oven: 0.2", "fridge: 0.2"))
+    ont = Ontology.from_yaml(tmp_path / "o.yaml", room_classes=tmp_path / "s.yaml")
+    assert ont.room_likelihood("Kitchen")[ont.class_index("refrigerator")] == pytest.approx(0.2, rel=1e-12)

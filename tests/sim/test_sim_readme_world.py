@@ -39,7 +39,10 @@ def test_the_readme_world_file_loads(tmp_path):
     spec = load_world(tmp_path / "world.yaml")
     s = spec.summary()
     assert (s["grid"]["rows"], s["grid"]["cols"]) == (114, 87)
-    assert s["sources"]["B1"] == {"position": [-0.6, 1.95], "room": "Kitchen"}
+    b1 = s["sources"]["B1"]
+    assert (b1["position"], b1["room"]) == ([-0.6, 1.95], "Kitchen")
+    # B1 lies in the oven's footprint: found within 0.5 m of its 6 x 6 working cells of 0.1 m
+    assert (b1["object"], b1["target_cells"], b1["findable"]) == ("oven_0", 36, True)
     assert s["sources"]["oven"]["position"] == [-0.6, 1.95]
     assert [w["role"] for w in s["windows"]] == ["inlet", "outlet"]
     assert s["start"] == [-3.0, -3.3]

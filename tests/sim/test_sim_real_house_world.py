@@ -61,7 +61,8 @@ def test_world_check_on_the_real_house(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "grid: 114 x 87 cells of 0.1 m" in out
     assert "source B1: (-0.60, 1.95) in Kitchen" in out
-    assert "at the class prior: Hallway, LivingRoom" in out
+    assert ("warning: p(o | room) omits room(s) Hallway, LivingRoom of the room map: they start at the class prior"
+            in out)
     from psgsl_pgm import load_world
 
     summary = load_world(path).summary()
@@ -109,3 +110,48 @@ def test_experiment_on_the_real_house_two_seeds(tmp_path, capsys):
     for fig in ("error-chart.png", "progression.png", "room-types.png"):
         assert (out / "B1-infotaxis" / fig).stat().st_size > 0
     assert "B1/infotaxis" in json.loads((out / "summary.json").read_text())
+
+
+def test_a_furniture_map_with_an_oven_at_b1_gives_found_runs(tmp_path, capsys):
+    """The lab's `_occupancy.yaml` (furniture drawn): B1 lies in the oven's footprint, which is what counts as
+    found — the point B1 itself is 0.52 m from the nearest drivable cell, out of the found radius."""
+    from psgsl_pgm import load_world
+    from psgsl_pgm._cli import main
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.search import run_closed_loop
+    from psgsl_pgm.search._space import FreeSpace
+    from psgsl_pgm.sim import Camera
+
+    (tmp_path / "furniture.yaml").write_text(yaml.safe_dump({
+        "image": str(SHARED / "_occupancy.pgm"), "resolution": 0.01, "origin": [-7.55, -7.88, 0.0],
+        "negate": 0, "occupied_thresh": 0.9, "free_thresh": 0.1}))
+    path = write_real_world(tmp_path, map="furniture.yaml")
+    spec = load_world(path)
+    house = spec.house()
+    nav = FreeSpace(house, Camera(), clearance=0.25).nav
+    c = house.grid.cell_centres()[nav]
+    assert np.hypot(c[:, 0] + 0.60, c[:, 1] - 1.95).min() == pytest.approx(0.52)  # the point: never within 0.5 m
+    f = spec.findability()["B1"]
+    assert f["object"] == "oven_0" and f["gap"] < 0.5 and f["findable"]
+    assert main(["world", "check", str(path)]) == 0
+    assert "source B1: (-0.60, 1.95) in Kitchen, object oven_0" in capsys.readouterr().out
+    world = spec.make_world(0, "B1", warm_up=ExperimentConfig().warm_up)
+    assert world.source_object is not None and world.source_object.name == "oven_0"
+    run = run_closed_loop("B1", 0, "infotaxis", "olfaction", world_spec=spec, config=ExperimentConfig(gas="smoke"))
+    assert run.found and run.time_to_find < 1000.0
+    assert run.geodesic == pytest.approx(f["geodesic"], rel=1e-12)
+
+
+def test_typos_in_the_labs_files_are_refused(tmp_path, capsys):
+    """The lab's own files with one typo each: world check refuses them in one line, naming the close name."""
+    from psgsl_pgm._cli import main
+
+    rooms = (SHARED / "ObjectProbByRoom.yaml").read_text().replace("  Kitchen:", "  Kitchn:")
+    (tmp_path / "rooms_typo.yaml").write_text(rooms)
+    assert main(["world", "check", str(write_real_world(tmp_path, room_classes="rooms_typo.yaml"))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'Kitchn' — did you mean 'Kitchen'?" in err
+    onto = (SHARED / "ontology.yaml").read_text().replace("Gases:", "Gasses:")
+    (tmp_path / "onto_typo.yaml").write_text(onto)
+    assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_typo.yaml"))]) == 2
+    assert "expected key 'Gases' (the lab's layout" in capsys.readouterr().err

@@ -70,7 +70,8 @@ def test_load_world_and_its_summary(flat):
     assert s["objects"] == {"oven": 1, "refrigerator": 1, "couch": 1}  # aliases: fridge, sofa
     assert s["unlisted_classes"] == ["couch", "refrigerator"]
     assert [w["role"] for w in s["windows"]] == ["inlet", "outlet"] and all(w["cells"] > 0 for w in s["windows"])
-    assert s["sources"]["oven"] == {"position": pytest.approx([1.0, 0.6]), "room": "Kitchen"}
+    oven = s["sources"]["oven"]
+    assert (oven["position"], oven["room"], oven["object"]) == (pytest.approx([1.0, 0.6]), "Kitchen", "oven_0")
     assert s["sources"]["S1"]["room"] == "LivingRoom"
     assert s["ontology"]["rooms_at_class_prior"] == ["Kitchen", "LivingRoom"]  # no room classes given
     # objects of classes the ontology does not list are "other" for the semantic term
