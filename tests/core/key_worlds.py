@@ -27,6 +27,7 @@ def write_full_world(d, *, beliefs: bool = True) -> tuple:
     from psgsl_pgm import load_world
     from psgsl_pgm.sim import GridMap, SceneObject, box_footprint, save_objects, save_ros_map
 
+    d.mkdir(parents=True, exist_ok=True)
     g = GridMap(np.zeros((30, 50), bool), 0.1)
     x, y = g.cell_centres()[..., 0], g.cell_centres()[..., 1]
     walls = (x < 0.2) | (x > 4.8) | (y < 0.2) | (y > 2.8) | ((x > 2.4) & (x < 2.6) & ~((y > 1.0) & (y < 2.0)))
