@@ -112,7 +112,14 @@ def check_output_dir(path, *, option: str = "--out", subdirs=()) -> Path:
         parent = parent.parent
     if not parent.is_dir():
         raise ValueError(f"{option}: cannot create the directory {str(out)!r} ({str(parent)!r} is not a directory)")
-    _probe(parent, option, out)
+    if parent == out:
+        _probe(out, option, out)
+        return out
+    try:
+        _probe(parent, option, out)
+    except ValueError as exc:
+        reason = str(exc).split(" (", 1)[-1].rstrip(")") if " (" in str(exc) else "not writable"
+        raise ValueError(f"{option}: cannot create the directory {str(out)!r} ({reason})") from None
     return out
 
 
