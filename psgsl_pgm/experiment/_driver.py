@@ -6,7 +6,7 @@ import itertools
 from functools import lru_cache
 from pathlib import Path
 
-from .._grid_runner import GridJob, grid_folder, run_grid
+from .._grid_runner import GridJob, atomic_write, grid_folder, run_grid
 from .._run_key import digest, run_key, world_key
 from ..sim import default_house
 from ._config import ESTIMATORS, ExperimentConfig, parse_source, source_label
@@ -200,8 +200,8 @@ def write_outputs(out, *, flat: bool = False, world=None) -> dict:
             fig = plot_room_types(start[1], start[2], house, source=shown.source_xy)
             fig.savefig(group / "room-types.png", dpi=110)
             plt.close(fig)
-        (group / "summary.txt").write_text(
-            format_table(summary, title=f"source {runs[0].source}, estimator {estimator}") + "\n", encoding="utf-8")
+        table = format_table(summary, title=f"source {runs[0].source}, estimator {estimator}") + "\n"
+        atomic_write(group / "summary.txt", lambda text, fh: fh.write(text.encode("utf-8")), table)
     if not flat:
         write_summary(summaries, out / "summary.json")
         write_csv(all_runs, out / "metrics.csv")

@@ -15,7 +15,7 @@ import pytest
 
 SEARCH = ["search", "--sources", "oven", "--policies", "tour", "greedy", "--variants", "olfaction", "--seeds", "2",
           "--budget", "12", "--workers", "1", "--quiet", "--no-figures"]
-EXPERIMENT = ["experiment", "--sources", "oven", "--seeds", "2", "--estimators", "infotaxis", "--stops", "3",
+EXPERIMENT = ["experiment", "--sources", "oven", "--seeds", "4", "--estimators", "infotaxis", "--stops", "6",
               "--workers", "1", "--quiet"]
 KILL_POINTS = 10
 
@@ -51,30 +51,49 @@ def _kill(proc):
     proc.communicate()
 
 
+def _count(out):
+    return len(list((out / "runs").glob("*.npz")))
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("argv", [SEARCH, EXPERIMENT], ids=["search", "experiment"])
 def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_summaries(tmp_path, argv):
+    """Ten seeded kill points: the even ones at a uniform time over the whole command (start-up, runs, summaries,
+    figures), the odd ones a uniform fraction of a run's time after the k-th run is stored (k uniform), so that
+    some kills surely land between runs and inside one."""
     ref = tmp_path / "reference"
     t0 = time.monotonic()
-    code, _, err = _run(argv, ref)
+    proc = _start(argv, ref)
+    seen = {}
+    while proc.poll() is None:
+        seen.setdefault(_count(ref), time.monotonic() - t0)
+        time.sleep(0.01)
+    _, err = proc.communicate()
     duration = time.monotonic() - t0
-    assert code == 0, err
+    assert proc.returncode == 0, err
+    total = _count(ref)
     expected = _summaries(ref)
-    assert any(name.endswith("summary.json") for name in expected)
-    total = len(list((ref / "runs").glob("*.npz")))
+    assert total >= 4 and any(name.endswith("summary.json") for name in expected)
+    per_run = max((seen.get(total, duration) - seen.get(1, 0.0)) / (total - 1), 0.05)
     rng = np.random.default_rng(23)
     stored = []
-    for i, at in enumerate(rng.uniform(0.0, 1.1 * duration, KILL_POINTS)):
+    for i in range(KILL_POINTS):
         out = tmp_path / f"killed{i}"
         proc = _start(argv, out)
-        time.sleep(at)
+        if i % 2 == 0:
+            time.sleep(rng.uniform(0.0, 1.05 * duration))
+        else:
+            k, pause = int(rng.integers(1, total)), rng.uniform(0.0, per_run)
+            while _count(out) < k and proc.poll() is None:
+                time.sleep(0.005)
+            time.sleep(pause)
         _kill(proc)  # kill -9: no handler runs, files are left as they are
-        stored.append(len(list((out / "runs").glob("*.npz"))))
+        stored.append(_count(out))
         code, _, err = _run(argv, out)
-        assert code == 0, (i, at, err)
-        assert _summaries(out) == expected, (i, at)
+        assert code == 0, (i, err)
+        assert _summaries(out) == expected, i
         left = [p for p in out.rglob("*") if p.name.endswith(".part") or p.name.startswith(".psgsl-probe")]
-        assert not left, (i, at, left)
+        assert not left, (i, left)
     assert any(0 < n < total for n in stored), stored  # some kills did land in the middle of the grid
 
 
