@@ -47,10 +47,10 @@ def _kitchen(args) -> int:
 
 def _demo(args) -> int:
     from ._grid_runner import GridInterrupted
-    from ._output import prepare_output_dir
+    from ._output import check_output_dir
     from .experiment import DEMO_SEEDS, format_table, run_demo
 
-    prepare_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
+    check_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
     seeds = range(args.seeds) if args.seeds is not None else DEMO_SEEDS
     print(f"psgsl demo: smoke from the kitchen oven of the simulated house, {len(seeds)} seeds, "
           f"{args.workers} workers -> {args.out}", flush=True)
@@ -81,7 +81,7 @@ def _demo(args) -> int:
 
 def _experiment(args) -> int:
     from ._grid_runner import GridInterrupted
-    from ._output import prepare_output_dir
+    from ._output import check_output_dir
     from .experiment import ExperimentConfig, check_sources, format_table, parse_source, run_experiment
 
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
@@ -103,7 +103,7 @@ def _experiment(args) -> int:
             spec.resolve_source(s, spec.house(0))
     else:
         check_sources(sources, seeds=seeds)  # unknown class, off the map: refused before any run
-    prepare_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
+    check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs; creates nothing
     where = "the embedded house" if spec is None else args.world
     print(f"psgsl experiment: {where}, sources {', '.join(map(str, names))}, {_seeds_text(seeds)}, gas "
           f"{config.gas!r} -> {args.out}", flush=True)

@@ -161,5 +161,5 @@ def _run(args) -> int:
         print(format_search_table(summary))
         print()
     print(f"written to {args.out}: summary.json, runs.csv, one folder per source and estimator (summary.json, "
-          "paired.json, runs.csv, survival.png, paths.png), runs/")
+          "paired.json when runs are paired, runs.csv, survival.png, paths.png), runs/")
     return 0

@@ -11,6 +11,11 @@ arguments — world, config, source, seed, estimator/policy/variant); the result
 * **the same results everywhere** — the same function runs on the same arguments with one BLAS thread per worker
   process on every backend, so the local pool and a dask cluster give bit-identical results.
 
+An output folder holds the runs of one configuration and one process at a time (:func:`grid_folder`): stored runs
+whose run key (:mod:`psgsl_pgm._run_key`) differs from the grid's are refused before anything is created, and
+``OUT/.lock`` (``flock``, released by the operating system when the process ends, however it ends) refuses a
+second process on the same folder. Temporary files left by a killed process are removed on the next start.
+
 Backends (``scheduler``):
 
 * ``None`` — a local pool of ``workers`` spawned processes (no extra install); ``workers=1`` runs in this process;
@@ -46,7 +51,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["CONNECT_TIMEOUT", "GridInterrupted", "GridJob", "GridReport", "MAX_ATTEMPTS", "WORKER_ENVIRON",
-           "atomic_write", "run_grid"]
+           "atomic_write", "grid_folder", "run_grid"]
 
 #: A job is given up (RuntimeError) after its worker process died this many times (dask's default
 #: ``distributed.scheduler.allowed-failures`` + 1 for the local pool; dask applies its own setting).
@@ -147,6 +152,103 @@ def atomic_write(path, write: Callable, result) -> Path:
             pass
         raise
     return path
+
+
+def _refuse_other_keys(out: Path, key: dict, read_key: Callable, pattern: str, option: str) -> None:
+    """ValueError naming each differing setting when a run stored in ``out/runs`` has another key."""
+    from ._run_key import digest, key_differences
+
+    runs = out / "runs"
+    if not runs.is_dir():
+        return
+    want = digest(key)
+    files = sorted(runs.glob(pattern))
+    for path in files:
+        stored = read_key(path)
+        if stored is None:
+            raise ValueError(f"{option} {out}: {path.name} was stored without a run key (by an older psgsl-pgm), "
+                             f"so its settings cannot be checked; use another {option}, or delete {runs} to "
+                             "recompute the runs")
+        if digest(stored) == want:
+            continue
+        diff = key_differences(stored, key) or ["(key format)"]
+        raise ValueError(f"{option} {out} holds runs computed with other settings ({len(files)} stored; "
+                         f"{path.name}: {'; '.join(diff)}); use another {option}, or delete {runs} to recompute "
+                         "them")
+
+
+def _lock(out: Path, option: str):
+    """An exclusive ``flock`` on ``out/.lock`` (its file descriptor), or ValueError when another process holds it."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no lock
+        return None
+    fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        try:
+            pid = os.read(fd, 32).decode("ascii", "replace").strip()
+        except OSError:
+            pid = ""
+        os.close(fd)
+        who = f" (pid {pid})" if pid.isdigit() else ""
+        raise ValueError(f"{option} {out} is in use by another psgsl process{who}; wait for it to end, or use "
+                         f"another {option}") from None
+    os.ftruncate(fd, 0)
+    os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+    return fd
+
+
+def _remove_temporaries(out: Path) -> None:
+    """Temporary files of writers killed mid-write (atomic_write's ``runs/.NAME.XXXX.part``, the summaries'
+    ``NAME.part``, the writability probe): never part of a result, removed under the lock."""
+    for pattern in ("runs/.*.part", "*.part", "*/*.part", ".psgsl-probe-*"):
+        for path in out.glob(pattern):
+            if path.is_file():
+                try:
+                    path.unlink()
+                except FileNotFoundError:
+                    pass
+
+
+@contextmanager
+def grid_folder(out, key: dict, *, read_key: Callable, pattern: str = "*.npz", option: str = "--out"):
+    """Open the output folder of a grid for this process; yields ``Path(out)``.
+
+    In this order: the folder is checked without creating anything (:func:`psgsl_pgm._output.check_output_dir`);
+    every run stored in ``out/runs`` (files matching ``pattern``) must carry ``key`` — else ValueError naming
+    each differing setting with both values, and nothing is created; then ``out/runs`` is created,
+    ``out/.lock`` locked (another process holding it: ValueError, one line), the stored runs checked again
+    (another process may have written before the lock was taken), and temporary files of killed writers removed.
+    The lock is held until the ``with`` block ends; the operating system releases it when the process dies.
+
+    Parameters
+    ----------
+    out : path
+    key : dict
+        The grid's run key (:func:`psgsl_pgm._run_key.run_key`).
+    read_key : callable, keyword-only
+        ``read_key(path)`` -> the key stored in a run file (None: a file without one); ValueError for a file
+        that is not a run file.
+    pattern : str, keyword-only
+        Run files in ``out/runs``.
+    option : str, keyword-only
+        The folder's option name in messages.
+    """
+    from ._output import check_output_dir, prepare_output_dir
+
+    out = check_output_dir(out, option=option, subdirs=("runs",))
+    _refuse_other_keys(out, key, read_key, pattern, option)
+    prepare_output_dir(out, option=option, subdirs=("runs",))
+    fd = _lock(out, option)
+    try:
+        _refuse_other_keys(out, key, read_key, pattern, option)
+        _remove_temporaries(out)
+        yield out
+    finally:
+        if fd is not None:
+            os.close(fd)
 
 
 def _call(fn, args, kwargs):

@@ -19,7 +19,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["check_output_file", "prepare_output_dir", "write_file_atomically"]
+__all__ = ["check_output_dir", "check_output_file", "prepare_output_dir", "write_file_atomically"]
 
 
 def _reason(exc: OSError) -> str:
@@ -90,6 +90,36 @@ def prepare_output_dir(path, *, option: str = "--out", subdirs=()) -> Path:
         except OSError as exc:
             raise ValueError(f"{option}: cannot create the directory {str(d)!r} ({_reason(exc)})") from None
     _probe(out, option, out)
+    return out
+
+
+def check_output_dir(path, *, option: str = "--out", subdirs=()) -> Path:
+    """Check, creating nothing, that :func:`prepare_output_dir` would succeed: ``path`` and its ``subdirs`` are
+    directories or missing, and a file can be written in ``path`` (or, when it is missing, in its nearest
+    existing parent, where it would be created). A command that is refused later leaves no folder behind.
+
+    Raises
+    ------
+    ValueError
+        As :func:`prepare_output_dir`.
+    """
+    out = _as_path(path, option)
+    for d in (out, *(out / s for s in subdirs)):
+        if d.exists() and not d.is_dir():
+            raise ValueError(f"{option}: {str(d)!r} exists and is not a directory; give a directory")
+    parent = out
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ValueError(f"{option}: cannot create the directory {str(out)!r} ({str(parent)!r} is not a directory)")
+    if parent == out:
+        _probe(out, option, out)
+        return out
+    try:
+        _probe(parent, option, out)
+    except ValueError as exc:
+        reason = str(exc).split(" (", 1)[-1].rstrip(")") if " (" in str(exc) else "not writable"
+        raise ValueError(f"{option}: cannot create the directory {str(out)!r} ({reason})") from None
     return out
 
 

@@ -6,13 +6,15 @@ import itertools
 from functools import lru_cache
 from pathlib import Path
 
-from .._grid_runner import GridJob, run_grid
+from .._grid_runner import GridJob, atomic_write, grid_folder, run_grid
+from .._run_key import digest, run_key, world_key
 from ..sim import default_house
 from ._config import ESTIMATORS, ExperimentConfig, parse_source, source_label
-from ._store import load_run, run_path, write_run
+from ._store import load_run, read_run_key, run_path, write_run
 from ._summary import format_table, summarize, write_csv, write_summary
 
-__all__ = ["DEMO_SEEDS", "SNAPSHOTS", "experiment_jobs", "run_demo", "run_experiment", "write_outputs"]
+__all__ = ["DEMO_SEEDS", "SNAPSHOTS", "experiment_jobs", "experiment_key", "run_demo", "run_experiment",
+           "stored_runs", "write_outputs"]
 
 #: Seeds of ``psgsl demo`` (a few; ``psgsl experiment`` reports ≥ 10).
 DEMO_SEEDS = tuple(range(4))
@@ -22,37 +24,53 @@ SNAPSHOTS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
 
 @lru_cache(maxsize=4)
-def _world(path):
-    """The world of a world file, loaded once per process (None: the embedded house)."""
+def _world_of(path, world_digest: str):
+    """The world of a world file (None: the embedded house) whose run-key part has ``world_digest``; loaded once
+    per process and content."""
     from ..sim import default_world, load_world
 
-    return default_world() if path is None else load_world(path)
+    spec = default_world() if path is None else load_world(path)
+    if digest(world_key(path)) != world_digest:  # hashed after loading: what was loaded is what was keyed
+        raise ValueError(f"{path or 'the embedded house'}: the world file or a file it names changed after the "
+                         "runs were keyed; run the command again")
+    return spec
 
 
-def search_in_world(source, seed, estimator, *, world=None, **kwargs):
-    """:func:`run_search` in the world of the world file ``world`` (a path, picklable for worker processes)."""
+def _world(path, world_digest: str | None = None):
+    """The world of the world file ``path`` (None: the embedded house) as its files are now, or — with
+    ``world_digest`` — as they were when a grid was keyed (ValueError if they changed since)."""
+    return _world_of(path, digest(world_key(path)) if world_digest is None else world_digest)
+
+
+def search_in_world(source, seed, estimator, *, world=None, world_digest=None, **kwargs):
+    """:func:`run_search` in the world of the world file ``world`` (a path, picklable for worker processes;
+    ``world_digest``: see :func:`_world`). The run's config records the start the robot used."""
     from . import _run
 
-    return _run.run_search(source, seed, estimator, world_spec=_world(world), **kwargs)
+    result = _run.run_search(source, seed, estimator, world_spec=_world(world, world_digest), **kwargs)
+    result.config["start"] = [float(v) for v in result.position[0]]
+    return result
 
 
-def _stored_config_check(expected: dict):
-    def check(job: GridJob) -> None:
-        stored = load_run(job.path).config
-        if stored != expected:
-            raise ValueError(f"{job.path} was computed with another configuration ({stored}); use a new output "
-                             "directory or delete the stored runs")
-    return check
-
-
-def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig, world=None) -> list:
+def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig, world=None,
+                    world_digest=None) -> list:
     """The grid's jobs (:class:`psgsl_pgm._grid_runner.GridJob`): one :func:`run_search` per (source, estimator,
     seed) in the world file ``world`` (None: the embedded house), its result to :func:`run_path`; the smallest
     seed keeps the progression figure's snapshots."""
     first = min(seeds)
     return [GridJob(run_path(out, source, estimator, seed), search_in_world, (source, seed, estimator),
-                    {"config": config, "snapshot_at": SNAPSHOTS if seed == first else (), "world": world})
+                    {"config": config, "snapshot_at": SNAPSHOTS if seed == first else (), "world": world,
+                     "world_digest": world_digest})
             for source, estimator, seed in itertools.product(sources, estimators, seeds)]
+
+
+def experiment_key(config: ExperimentConfig, world_part: dict, *, flat: bool = False, source=None,
+                   estimator=None) -> dict:
+    """The run key (:mod:`psgsl_pgm._run_key`) of an experiment's stored runs: the world's content, the
+    :class:`ExperimentConfig`, the package version and the folder's layout (``flat``: one source and estimator
+    written straight into the folder, as ``psgsl demo`` does)."""
+    layout = {"flat": True, "source": source_label(source), "estimator": estimator} if flat else {"flat": False}
+    return run_key("experiment", world_part, experiment=config, layout=layout)
 
 
 def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",), *, out, workers: int = 2,
@@ -67,8 +85,11 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     seeds : iterable of int
     estimators : sequence of {"infotaxis", "pmfs"}
     out : path, keyword-only
-        Output directory; finished runs live in ``out/runs`` and are never redone (resumable); a stored run
-        with another configuration is an error, not silently mixed in.
+        Output directory; finished runs live in ``out/runs`` and are never redone (resumable). The folder holds
+        one configuration: a stored run whose run key (the world file's content and the bytes of every file it
+        names, ``config``, the package version; :mod:`psgsl_pgm._run_key`) differs is refused, naming each
+        differing setting, before anything is created; a second process on the same folder is refused
+        (:func:`psgsl_pgm._grid_runner.grid_folder`).
     workers : int, keyword-only
         Worker processes of the local pool (1 = run in this process) or of ``scheduler="local"``.
     config : ExperimentConfig, optional, keyword-only
@@ -87,7 +108,8 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     Returns
     -------
     dict
-        ``{"source/estimator": summary}`` (see :func:`summarize`), also written to ``out/summary.json``.
+        ``{"source/estimator": summary}`` (see :func:`summarize`) over every run stored in ``out`` (also those of
+        earlier calls with other sources or seeds), also written to ``out/summary.json``.
 
     Raises
     ------
@@ -105,20 +127,39 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
         raise ValueError("need at least one source, one seed and one estimator")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    if flat and (len(sources) != 1 or len(estimators) != 1):
+        raise ValueError(f"flat=True writes one source and one estimator, got sources {sources} and estimators "
+                         f"{estimators}")
     world = None if world is None else str(Path(world).resolve())
-    from ._run import run_config
+    world_part = world_key(world)
+    world_digest = digest(world_part)
+    _world(world, world_digest)  # a bad world file fails here, before any output is written
+    key = experiment_key(config, world_part, flat=flat, source=sources[0], estimator=estimators[0])
 
-    expected = run_config(config, _world(world))  # a bad world file fails here, before any output is written
-    out = Path(out)
-    (out / "runs").mkdir(parents=True, exist_ok=True)
-    jobs = experiment_jobs(sources, seeds, estimators, out=out, config=config, world=world)
-    run_grid(jobs, write=write_run, check_done=_stored_config_check(expected), scheduler=scheduler, workers=workers,
-             progress=progress, desc="search runs")
-    return write_outputs(out, sources, seeds, estimators, flat=flat, world=world)
+    def write(result, fh) -> None:
+        result.config["key"] = key  # what a later call is checked against
+        write_run(result, fh)
+
+    with grid_folder(out, key, read_key=read_run_key) as out:
+        jobs = experiment_jobs(sources, seeds, estimators, out=out, config=config, world=world,
+                               world_digest=world_digest)
+        run_grid(jobs, write=write, scheduler=scheduler, workers=workers, progress=progress, desc="search runs")
+        return write_outputs(out, flat=flat, world=world)
 
 
-def write_outputs(out, sources, seeds, estimators, *, flat: bool = False, world=None) -> dict:
-    """Aggregate the stored runs of the grid into summaries, CSV and figures.
+def stored_runs(out) -> dict:
+    """Every run stored in ``out/runs``, by group: ``{(source, estimator): [RunResult, ...]}`` (seeds in order;
+    groups by source label, then in the order of :data:`ESTIMATORS`)."""
+    groups: dict = {}
+    for path in sorted((Path(out) / "runs").glob("*.npz")):
+        r = load_run(path)
+        groups.setdefault((r.source, r.estimator), []).append(r)
+    order = sorted(groups, key=lambda g: (source_label(g[0]), ESTIMATORS.index(g[1]) if g[1] in ESTIMATORS else 99))
+    return {g: sorted(groups[g], key=lambda r: r.seed) for g in order}
+
+
+def write_outputs(out, *, flat: bool = False, world=None) -> dict:
+    """Aggregate every run stored in ``out/runs`` (:func:`stored_runs`) into summaries, CSV and figures.
 
     With ``flat=True`` (the demo: one source, one estimator) everything goes straight into ``out``; otherwise
     into ``out/<source>-<estimator>/``, plus ``out/summary.json`` and ``out/metrics.csv`` over all groups.
@@ -131,8 +172,12 @@ def write_outputs(out, sources, seeds, estimators, *, flat: bool = False, world=
 
     out = Path(out)
     summaries, all_runs = {}, []
-    for source, estimator in itertools.product(sources, estimators):
-        runs = [load_run(run_path(out, source, estimator, s)) for s in seeds]
+    groups = stored_runs(out)
+    if not groups:
+        raise ValueError(f"no runs stored in {out / 'runs'}")
+    if flat and len(groups) != 1:
+        raise ValueError(f"{out / 'runs'} holds runs of {len(groups)} sources × estimators; flat=True writes one")
+    for (source, estimator), runs in groups.items():
         all_runs += runs
         group = out if flat else out / f"{source_label(source)}-{estimator}"
         group.mkdir(parents=True, exist_ok=True)
@@ -155,8 +200,8 @@ def write_outputs(out, sources, seeds, estimators, *, flat: bool = False, world=
             fig = plot_room_types(start[1], start[2], house, source=shown.source_xy)
             fig.savefig(group / "room-types.png", dpi=110)
             plt.close(fig)
-        (group / "summary.txt").write_text(
-            format_table(summary, title=f"source {runs[0].source}, estimator {estimator}") + "\n", encoding="utf-8")
+        table = format_table(summary, title=f"source {runs[0].source}, estimator {estimator}") + "\n"
+        atomic_write(group / "summary.txt", lambda text, fh: fh.write(text.encode("utf-8")), table)
     if not flat:
         write_summary(summaries, out / "summary.json")
         write_csv(all_runs, out / "metrics.csv")

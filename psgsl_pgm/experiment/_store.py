@@ -12,7 +12,7 @@ from .._npyfile import READ_ERRORS, load_npy
 from ._config import source_label
 from ._run import RunResult
 
-__all__ = ["load_run", "run_path", "save_run", "write_run"]
+__all__ = ["read_run_key", "load_run", "run_path", "save_run", "write_run"]
 
 
 def run_path(directory, source, estimator: str, seed: int) -> Path:
@@ -63,3 +63,17 @@ def load_run(path) -> RunResult:
     except (*READ_ERRORS, KeyError, TypeError) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise ValueError(f"{path} is not a run file written by psgsl ({reason}); delete it to recompute the run") from None
+
+
+def read_run_key(path) -> dict | None:
+    """The run key (:mod:`psgsl_pgm._run_key`) stored with a run, read without loading its arrays; None for a
+    run stored without one. ValueError naming the file if it is not a run file written by psgsl."""
+    path = Path(path)
+    try:
+        with load_npy(path, str(path)) as z:
+            config = json.loads(str(z["config"]))
+    except (*READ_ERRORS, KeyError, TypeError) as exc:
+        raise ValueError(f"{path} is not a run file written by psgsl ({' '.join(str(exc).split())}); delete it to "
+                         "recompute the run") from None
+    key = config.get("key") if isinstance(config, dict) else None
+    return key if isinstance(key, dict) else None

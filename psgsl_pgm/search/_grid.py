@@ -12,32 +12,31 @@ from pathlib import Path
 import numpy as np
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
+from .._run_key import digest, run_key, world_key
 from ..experiment._driver import _world
 from ..experiment._metrics import calibration_summary, mean_ci
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import wilson_interval
 from ._policies import POLICIES
-from ._store import load_search_run, search_run_path, write_search_run
+from ._store import load_search_run, read_run_key, search_run_path, write_search_run
 from ._survival import holm, kaplan_meier, km_median, paired_comparison, rmst
 
 __all__ = ["PRIMARY", "run_search_grid", "summarize_runs", "write_search_outputs"]
 
 
-def _config_of(config: ExperimentConfig, search: SearchConfig, world=None) -> dict:
-    """The settings a stored run is checked against; a world file's path is part of them (None: the embedded
-    house, and no "world" key, so that runs stored before world files still resume)."""
-    out = {"experiment": config.to_dict(), "search": search.to_dict()}
-    if world is not None:
-        out["world"] = str(world)
-    return out
+def search_key(config: ExperimentConfig, search: SearchConfig, world_part: dict) -> dict:
+    """The run key (:mod:`psgsl_pgm._run_key`) of the closed loop's stored runs: the world's content (its
+    :func:`psgsl_pgm._run_key.world_key`), both configs and the package version."""
+    return run_key("search", world_part, experiment=config, search=search)
 
 
-def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None, **kwargs):
+def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None, world_digest=None, **kwargs):
     """:func:`run_closed_loop` in the world of the world file ``world`` (a resolved path, picklable for worker
-    processes; None: the embedded house). The stored run's config names the world file."""
-    if world is None:
+    processes; None: the embedded house; ``world_digest``: the content it was keyed with, see
+    :func:`psgsl_pgm.experiment._driver._world`). The stored run's config names the world file."""
+    if world is None:  # the embedded house: the loop's own default world (part of the package)
         return run_closed_loop(source, seed, policy, variant, estimator, **kwargs)
-    run = run_closed_loop(source, seed, policy, variant, estimator, world_spec=_world(world), **kwargs)
+    run = run_closed_loop(source, seed, policy, variant, estimator, world_spec=_world(world, world_digest), **kwargs)
     run.config["world"] = str(world)
     return run
 
@@ -179,7 +178,8 @@ def _write_csv(runs, path: Path) -> None:
 
 def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
     """Aggregate every run stored in ``out/runs``: per source × estimator a folder with ``summary.json``
-    (one entry per ``"<policy>/<variant>"``), ``paired.json``, ``runs.csv`` and figures; plus ``out/summary.json``
+    (one entry per ``"<policy>/<variant>"``), ``paired.json`` (only when something is paired), ``runs.csv`` and
+    figures; plus ``out/summary.json``
     (``{"<source>/<estimator>": {"<policy>/<variant>": ...}}``) and ``out/runs.csv`` over all of them.
     ``world`` is the runs' world file (default: the embedded house), whose house the path figures draw."""
     out = Path(out)
@@ -198,7 +198,9 @@ def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
         folder.mkdir(parents=True, exist_ok=True)
         summary = _finite({k: summarize_runs(v) for k, v in by_key.items()})
         _write_json(summary, folder / "summary.json")
-        _write_json(_paired(by_key, source=source, estimator=estimator), folder / "paired.json")
+        paired = _paired(by_key, source=source, estimator=estimator)
+        if paired:  # nothing paired (one policy/variant, or fewer than 2 common seeds): no paired.json
+            _write_json(paired, folder / "paired.json")
         _write_csv([r for v in by_key.values() for r in v], folder / "runs.csv")
         top[f"{source}/{estimator}"] = summary
         if figures:
@@ -262,8 +264,11 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     a world file (:func:`psgsl_pgm.load_world`; sources may then be its source names), loaded and checked
     before any output is written; default: the embedded house.
 
-    Finished runs live in ``out/runs`` (one atomic file each) and are never redone; a stored run with another
-    configuration is an error. Aggregation covers every run stored in ``out/runs``
+    Finished runs live in ``out/runs`` (one atomic file each) and are never redone. The folder holds one
+    configuration: a stored run whose run key (the world file's content and the bytes of every file it names,
+    both configs, the package version; :mod:`psgsl_pgm._run_key`) differs is refused, naming each differing
+    setting, before anything is created; a second process on the same folder is refused
+    (:func:`psgsl_pgm._grid_runner.grid_folder`). Aggregation covers every run stored in ``out/runs``
     (:func:`write_search_outputs`). Returns the top-level summary.
     """
     config = ExperimentConfig() if config is None else config
@@ -287,23 +292,22 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
                 raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
                                  f"estimator of {ESTIMATORS}, got {(p, v, e)}")
     world = None if world is None else str(Path(world).resolve())
-    world_spec = None if world is None else _world(world)  # a bad world file fails here, before any output
+    world_part = world_key(world)
+    world_digest = digest(world_part)
+    world_spec = None if world is None else _world(world, world_digest)  # a bad world file fails here
     _check_sources({g[0] for g in grid}, world_spec)
-    out = Path(out)
-    (out / "runs").mkdir(parents=True, exist_ok=True)
-    want = json.loads(json.dumps(_config_of(config, search, world)))
-    from .._grid_runner import GridJob, run_grid
+    key = search_key(config, search, world_part)
+    from .._grid_runner import GridJob, grid_folder, run_grid
 
-    def check_done(job) -> None:
-        stored = load_search_run(job.path).config
-        if stored != want:
-            raise ValueError(f"{job.path} was computed with another configuration ({stored}); use a new output "
-                             "directory or delete the stored runs")
+    def write(run, fh) -> None:
+        run.config["key"] = key  # what a later call is checked against
+        write_search_run(run, fh)
 
-    jobs = [GridJob(search_run_path(out, source, policy, variant, estimator, seed),
-                    closed_loop_in_world, (source, seed, policy, variant, estimator),
-                    {"config": config, "search": search, "world": world})
-            for source, policy, variant, estimator, seed in grid]
-    run_grid(jobs, write=write_search_run, check_done=check_done, scheduler=scheduler, workers=workers,
-             progress=progress, desc="closed-loop runs")
-    return write_search_outputs(out, figures=figures, world=world)
+    with grid_folder(out, key, read_key=read_run_key) as out:
+        jobs = [GridJob(search_run_path(out, source, policy, variant, estimator, seed),
+                        closed_loop_in_world, (source, seed, policy, variant, estimator),
+                        {"config": config, "search": search, "world": world, "world_digest": world_digest})
+                for source, policy, variant, estimator, seed in grid]
+        run_grid(jobs, write=write, scheduler=scheduler, workers=workers, progress=progress,
+                 desc="closed-loop runs")
+        return write_search_outputs(out, figures=figures, world=world)

@@ -339,4 +339,6 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                      arrays["heading"], arrays["hit"].astype(bool), arrays["path_length"], arrays["error"],
                      arrays["map_error"], arrays["spread"], arrays["region_area"], arrays["region_hit"].astype(bool),
                      np.array(path_pts), post.astype(np.float32),
-                     {"experiment": config.to_dict(), "search": search.to_dict()}, arrays["hpd_level"])
+                     {"experiment": config.to_dict(),
+                      "search": search.to_dict() | {"start": [float(v) for v in start_xy]}},  # the start used
+                     arrays["hpd_level"])

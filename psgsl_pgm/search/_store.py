@@ -12,7 +12,7 @@ from .._npyfile import READ_ERRORS, load_npy
 from ..experiment._config import source_label
 from ._loop import SearchRun
 
-__all__ = ["load_search_run", "save_search_run", "search_run_path", "write_search_run"]
+__all__ = ["read_run_key", "load_search_run", "save_search_run", "search_run_path", "write_search_run"]
 
 _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
            "region_area", "region_hit", "hpd_level", "path", "final_posterior")
@@ -50,3 +50,17 @@ def load_search_run(path) -> SearchRun:
                              config=json.loads(str(z["config"])), **arrays)
     except (*READ_ERRORS, KeyError, TypeError) as exc:
         raise ValueError(f"{path} is not a search run file written by psgsl ({' '.join(str(exc).split())})") from None
+
+
+def read_run_key(path) -> dict | None:
+    """The run key (:mod:`psgsl_pgm._run_key`) stored with a run, read without loading its arrays; None for a
+    run stored without one. ValueError naming the file if it is not a search run file written by psgsl."""
+    path = Path(path)
+    try:
+        with load_npy(path, str(path)) as z:
+            config = json.loads(str(z["config"]))
+    except (*READ_ERRORS, KeyError, TypeError) as exc:
+        raise ValueError(f"{path} is not a search run file written by psgsl ({' '.join(str(exc).split())}); delete it to "
+                         "recompute the run") from None
+    key = config.get("key") if isinstance(config, dict) else None
+    return key if isinstance(key, dict) else None

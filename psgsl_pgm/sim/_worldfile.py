@@ -57,7 +57,7 @@ from ._resample import coarsen_factor, coarsen_labels, coarsen_occupancy
 from ._roommap import load_room_map
 from ._rosmap import load_ros_map
 
-__all__ = ["WorldSpec", "default_world", "load_world", "navigable"]
+__all__ = ["WorldSpec", "default_world", "default_world_path", "load_world", "navigable", "world_files"]
 
 _KEYS = ("map", "resolution", "rooms", "objects", "ontology", "room_classes", "gas", "source_region",
          "semantic_map", "wind", "start", "sources", "builtin", "clearance", "other_classes")
@@ -374,6 +374,63 @@ def default_world() -> WorldSpec:
     """The embedded house as a world (``psgsl_pgm/data/worlds/house.yaml``)."""
     with resources.as_file(resources.files("psgsl_pgm") / "data" / "worlds" / "house.yaml") as path:
         return load_world(path)
+
+
+def default_world_path() -> Path:
+    """The embedded house's world file, ``psgsl_pgm/data/worlds/house.yaml`` (a file of the installed package)."""
+    return Path(str(resources.files("psgsl_pgm") / "data" / "worlds" / "house.yaml"))
+
+
+#: World keys whose value names a file (unless it is one of the listed built-in words).
+_FILE_KEYS = {"map": (), "rooms": (), "objects": (), "ontology": ("house",), "room_classes": (),
+              "source_region": _REGIONS, "semantic_map": ()}
+
+
+def world_files(path) -> dict:
+    """Every file a world file names, directly or through a file it names: ``{label: path}``.
+
+    Labels are the world key (``map``, ``rooms``, ``objects``, ``ontology``, ``room_classes``,
+    ``source_region``, ``semantic_map``, ``wind.gaden_csv`` or ``wind.gaden_csv[i]``) and, for a file named
+    inside another, that file's label and field: ``map/image`` (the map's PGM/PNG), ``rooms/image`` or
+    ``rooms/categories[i].mask`` (the room images). Paths resolve as :func:`load_world` resolves them. Values
+    that name no file (``ontology: house``, ``source_region: rooms``) are left out; a malformed entry is left
+    out too (:func:`load_world` is the judge of the file; this function only lists what it would read).
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        The world file itself cannot be read as a YAML mapping.
+    """
+    wpath, data = read_yaml_mapping(path)
+    out = {}
+    for key, words in _FILE_KEYS.items():
+        name = data.get(key)
+        if isinstance(name, str) and name.strip() and name not in words:
+            out[key] = resolve(wpath, name, key)
+    wind = data.get("wind")
+    csv = wind.get("gaden_csv") if isinstance(wind, dict) else None
+    if isinstance(csv, str) and csv.strip():
+        out["wind.gaden_csv"] = resolve(wpath, csv, "wind.gaden_csv")
+    elif isinstance(csv, list):
+        for i, name in enumerate(csv):
+            if isinstance(name, str) and name.strip():
+                out[f"wind.gaden_csv[{i}]"] = resolve(wpath, name, f"wind.gaden_csv[{i}]")
+    for key, fields in (("map", ("image",)), ("rooms", ("image", "categories"))):
+        inner = out.get(key)
+        try:
+            ipath, idata = read_yaml_mapping(inner) if inner is not None and inner.is_file() else (None, {})
+        except (ValueError, FileNotFoundError, TypeError):
+            continue
+        for f in fields:
+            value = idata.get(f)
+            if f == "categories" and isinstance(value, list):
+                for i, entry in enumerate(value):
+                    mask = entry.get("mask") if isinstance(entry, dict) else None
+                    if isinstance(mask, str) and mask.strip():
+                        out[f"{key}/categories[{i}].mask"] = resolve(ipath, mask, f"categories[{i}].mask")
+            elif isinstance(value, str) and value.strip():
+                out[f"{key}/{f}"] = resolve(ipath, value, f)
+    return out
 
 
 def load_world(path) -> WorldSpec:

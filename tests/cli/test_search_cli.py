@@ -87,7 +87,8 @@ def test_the_scoring_rule_is_stored_with_the_runs_and_a_grid_of_the_other_rule_i
     capsys.readouterr()
     assert main(argv) == 2  # the default rule, per-time, into the same directory
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "computed with another configuration" in err[0]
+    assert len(err) == 1 and "computed with other settings" in err[0]
+    assert "search.score: gain → per-time" in err[0]  # the setting and both values
     with pytest.raises(SystemExit) as exc:
         main(argv + ["--score", "fastest"])
     assert exc.value.code == 2

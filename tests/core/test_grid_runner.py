@@ -141,3 +141,74 @@ def test_atomic_write_leaves_nothing_when_the_writer_fails(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert (tmp_path / "a.npz").stat().st_mode & 0o777 == 0o666 & ~umask  # as open() would create it
+
+
+# ---------------------------------------------------------------------------------------------- grid_folder
+
+
+def _read_key(path):
+    return json.loads(path.read_text()).get("key")
+
+
+def _stored(out, name, key):
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    (out / "runs" / name).write_text(json.dumps({"key": key}))
+
+
+def test_grid_folder_refuses_other_keys_naming_each_setting_and_creates_nothing(tmp_path):
+    from psgsl_pgm._grid_runner import grid_folder
+
+    out = tmp_path / "out"
+    _stored(out, "a.json", {"speed": 0.2, "map": "sha256 " + "1a2b" * 16})
+    before = sorted(p.name for p in out.rglob("*"))
+    with pytest.raises(ValueError) as exc:
+        with grid_folder(out, {"speed": 0.6, "map": "sha256 " + "9f8e" * 16}, read_key=_read_key, pattern="*.json"):
+            raise AssertionError("entered a folder with runs of other settings")
+    msg = str(exc.value)
+    assert "speed: 0.2 → 0.6" in msg and "map: sha256 1a2b1a2b1a2b… → sha256 9f8e9f8e9f8e…" in msg
+    assert "\n" not in msg and "a.json" in msg
+    assert sorted(p.name for p in out.rglob("*")) == before  # no lock file, nothing
+    (out / "runs" / "b.json").write_text("{}")  # a run without a key cannot be checked: refused as well
+    with pytest.raises(ValueError, match="b.json was stored without a run key"):
+        with grid_folder(out, {"speed": 0.2, "map": "sha256 " + "1a2b" * 16}, read_key=_read_key,
+                         pattern="*.json"):
+            pass
+    # a folder that does not exist is created only once the checks pass
+    fresh = tmp_path / "a" / "b"
+    with grid_folder(fresh, {"speed": 0.2}, read_key=_read_key, pattern="*.json") as folder:
+        assert folder == fresh and (fresh / "runs").is_dir()
+
+
+def test_grid_folder_is_one_process_at_a_time_and_removes_temporaries(tmp_path):
+    from psgsl_pgm._grid_runner import grid_folder
+
+    out = tmp_path / "out"
+    _stored(out, "a.json", {"x": 1})
+    for name in ("runs/.a.json.1234abcd.part", "summary.json.part", "runs.csv.part", ".psgsl-probe-xyz"):
+        (out / name).write_text("half")
+    (out / "group").mkdir()
+    (out / "group" / "summary.json.part").write_text("half")
+    keep = {out / "runs" / "a.json", out / "notes.txt"}
+    (out / "notes.txt").write_text("mine")
+    with grid_folder(out, {"x": 1}, read_key=_read_key, pattern="*.json"):
+        assert {p for p in out.rglob("*") if p.is_file()} == keep | {out / ".lock"}
+        assert (out / ".lock").read_text().strip() == str(os.getpid())
+        with pytest.raises(ValueError) as exc:  # a second opening (another open file description) is refused
+            with grid_folder(out, {"x": 1}, read_key=_read_key, pattern="*.json"):
+                pass
+        assert str(exc.value) == (f"--out {out} is in use by another psgsl process (pid {os.getpid()}); wait for "
+                                  "it to end, or use another --out")
+    with grid_folder(out, {"x": 1}, read_key=_read_key, pattern="*.json"):  # released at the end of the block
+        pass
+
+
+def test_check_output_dir_creates_nothing(tmp_path):
+    from psgsl_pgm._output import check_output_dir
+
+    assert check_output_dir(tmp_path / "a" / "b", subdirs=("runs",)) == tmp_path / "a" / "b"
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "f").write_text("")
+    with pytest.raises(ValueError, match="is not a directory"):
+        check_output_dir(tmp_path / "f" / "out")
+    with pytest.raises(ValueError, match="exists and is not a directory"):
+        check_output_dir(tmp_path / "f")

@@ -42,29 +42,39 @@ def test_demo_writes_every_output_and_a_consistent_summary(demo_dir):
         np.testing.assert_allclose(summary[name]["final_error"]["ci95"], expected["ci95"], atol=1e-5)
 
 
-def test_experiment_is_resumable(demo_dir, monkeypatch, capsys):
-    """The demo's runs are on disk: an experiment over the same grid recomputes nothing."""
+def test_experiment_is_resumable(tmp_path, monkeypatch, capsys):
+    """An experiment over a grid whose runs are on disk recomputes nothing."""
     import psgsl_pgm.experiment._run as run_module
+
+    argv = ["experiment", "--sources", "oven", "--seeds", "2", "--estimators", "infotaxis", "--workers", "1",
+            "--stops", "3", "--out", str(tmp_path), "--quiet"]
+    assert main(argv) == 0
 
     def refuse(*args, **kwargs):
         raise AssertionError("a finished run was recomputed")
 
     monkeypatch.setattr(run_module, "run_search", refuse)
-    code = main(["experiment", "--sources", "oven", "--seeds", "2", "--estimators", "infotaxis", "--workers", "1",
-                 "--out", str(demo_dir), "--quiet"])
-    assert code == 0
+    capsys.readouterr()
+    assert main(argv) == 0
     assert "oven/infotaxis" in capsys.readouterr().out
-    nested = json.loads((demo_dir / "summary.json").read_text())
+    nested = json.loads((tmp_path / "summary.json").read_text())
     assert nested["oven/infotaxis"]["n_runs"] == 2
-    assert (demo_dir / "oven-infotaxis" / "error-chart.png").exists()
+    assert (tmp_path / "oven-infotaxis" / "error-chart.png").exists()
 
 
 def test_stored_runs_with_another_configuration_are_refused(demo_dir):
     from psgsl_pgm.experiment import ExperimentConfig, run_experiment
 
-    with pytest.raises(ValueError, match="computed with another configuration"):
+    before = sorted(p.name for p in demo_dir.rglob("*"))
+    with pytest.raises(ValueError, match="computed with other settings") as exc:
         run_experiment(["oven"], [0], ["infotaxis"], out=demo_dir, config=ExperimentConfig(encounter_scale=1.0),
-                       progress=False)
+                       progress=False, flat=True)
+    default = ExperimentConfig().encounter_scale
+    assert f"experiment.encounter_scale: {default!r} → 1)" in str(exc.value)
+    # the demo's flat layout and an experiment's folders per source never share a directory
+    with pytest.raises(ValueError, match="layout.flat: true → false"):
+        run_experiment(["oven"], [0], ["infotaxis"], out=demo_dir, progress=False)
+    assert sorted(p.name for p in demo_dir.rglob("*")) == before  # refused: nothing written
 
 
 def test_estimate_on_user_arrays_equals_the_library(tmp_path):

@@ -74,11 +74,12 @@ def test_experiment_command_with_a_world(tmp_path, capsys):
     assert set(json.loads((out / "summary.json").read_text())) == {"stove/infotaxis"}
     assert set(json.loads((out / "stove-infotaxis" / "summary.json").read_text())) >= set(VARIANTS)
     assert (out / "stove-infotaxis" / "progression.png").stat().st_size > 0
-    # the stored run names its world: another world file in the same output directory is refused
-    other = write_flat(tmp_path / "out", sources={"stove": "oven"})
+    # the stored run carries its world's content: another world in the same output directory is refused
+    (tmp_path / "w2").mkdir()
+    other = write_flat(tmp_path / "w2", sources={"stove": "oven"}, start=[1.5, 1.2])
     assert main(["experiment", "--world", str(other), "--seeds", "1", "--estimators", "infotaxis", "--workers", "1",
                  "--out", str(out), "--quiet"]) == 2
-    assert "computed with another configuration" in capsys.readouterr().err
+    assert "world.start: [1.5, 1.5] → [1.5, 1.2]" in capsys.readouterr().err
 
 
 def test_experiment_command_bad_world_one_line_exit_2(tmp_path, capsys):

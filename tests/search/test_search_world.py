@@ -1,5 +1,5 @@
-"""`psgsl search --world`: the closed-loop grid on a world file (its sources, its house, its path in the stored
-config, so that runs of another world in the same output directory are refused)."""
+"""`psgsl search --world`: the closed-loop grid on a world file (its sources, its house, its content in the
+stored run key, so that runs of another world in the same output directory are refused)."""
 
 import json
 from pathlib import Path
@@ -27,7 +27,7 @@ def _args(world, out, *extra):
             "--budget", "30", "--workers", "1", "--no-figures", "--quiet", "--out", str(out), *extra]
 
 
-def test_search_command_with_a_world(tmp_path):
+def test_search_command_with_a_world(tmp_path, capsys):
     world = write_world(tmp_path / "w1")
     out = tmp_path / "out"
     assert main(_args(world, out)) == 0  # without --sources: the world's sources
@@ -35,10 +35,20 @@ def test_search_command_with_a_world(tmp_path):
     assert set(top) == {"stove/infotaxis"}
     assert set(top["stove/infotaxis"]) == {"tour/olfaction"}
     assert top["stove/infotaxis"]["tour/olfaction"]["n_runs"] == 1
-    # the stored run names its world: another world file in the same output directory is refused
-    other = write_world(tmp_path / "w2")
-    assert main(_args(other, out)) == 2
+    stamps = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    # runs are keyed by content: a copy of the same world elsewhere is the same world and resumes ...
+    copy = write_world(tmp_path / "w2")
+    assert main(_args(copy, out)) == 0
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
+    # ... a world with other sources is another world: refused, naming the setting and both values
+    other = write_world(tmp_path / "w3", sources={"cooker": "oven"})
+    capsys.readouterr()
+    assert main(_args(other, out, "--sources", "cooker")) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "world.sources.stove: oven → (none)" in err[0]
+    assert "world.sources.cooker: (none) → oven" in err[0]
     assert main(_args(world, out)) == 0  # the same world resumes
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
 
 
 def test_a_bad_world_file_is_one_line_and_exit_2(tmp_path, capsys):

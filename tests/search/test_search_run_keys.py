@@ -1,0 +1,81 @@
+"""`psgsl search` keys its stored runs by content: each file the world names, edited by one byte, makes the stored
+runs refused (naming the file's key and both hashes), never reused; restored, they resume. Options and the world's
+settings likewise. Nothing is created by a refused command; paired.json only when something is paired; the
+stored config records the start the robot used."""
+
+from __future__ import annotations
+
+import json
+
+import yaml
+
+from psgsl_pgm._cli import main
+from psgsl_pgm.search import load_search_run
+
+from ..core.key_worlds import one_byte_edit, sha, write_full_world
+
+
+def _args(world, out, *extra):
+    return ["search", "--world", str(world), "--sources", "stove", "--seeds", "1", "--policies", "tour",
+            "--variants", "olfaction", "--budget", "20", "--workers", "1", "--no-figures", "--quiet",
+            "--out", str(out), *extra]
+
+
+def _tree(out):
+    return {str(p.relative_to(out)): p.stat().st_mtime_ns for p in sorted(out.rglob("*"))}
+
+
+def test_each_named_file_edited_by_one_byte_is_refused_never_reused(tmp_path, capsys):
+    world, files = write_full_world(tmp_path / "w")
+    out = tmp_path / "out"
+    assert main(_args(world, out)) == 0
+    tree = _tree(out)
+    assert len(files) == 12  # map + image, rooms + 2 masks, objects, ontology, room table, region, beliefs, 2 CSVs
+    for label, path in files.items():
+        old = one_byte_edit(path)
+        capsys.readouterr()
+        assert main(_args(world, out)) == 2, label
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1, err
+        assert f"world.{label}: sha256 {sha(old)[:12]}… → sha256 {sha(path)[:12]}…" in err[0], (label, err[0])
+        assert err[0].count("→") == 1, err[0]  # only that file differs
+        assert _tree(out) == tree, label  # nothing written, nothing recomputed
+        path.write_bytes(old)
+    assert main(_args(world, out)) == 0  # restored: the stored run resumes
+    runs = sorted((out / "runs").glob("*.npz"))
+    assert [p.name for p in runs] == ["stove__tour__olfaction__infotaxis__seed0.npz"]
+    assert runs[0].stat().st_mtime_ns == tree["runs/stove__tour__olfaction__infotaxis__seed0.npz"]
+
+
+def test_options_and_world_settings_are_refused_with_both_values(tmp_path, capsys):
+    world, files = write_full_world(tmp_path / "w", beliefs=False)
+    out = tmp_path / "out"
+    assert main(_args(world, out)) == 0
+    tree = _tree(out)
+    capsys.readouterr()
+    assert main(_args(world, out, "--budget", "40")) == 2
+    assert "search.time_budget: 20 → 40" in capsys.readouterr().err
+    data = yaml.safe_load(world.read_text())
+    data["wind"]["period"] = 3.0
+    data["start"] = [1.5, 1.2]
+    world.write_text(yaml.safe_dump(data))
+    assert main(_args(world, out)) == 2
+    err = capsys.readouterr().err
+    assert "world.start: [1.5, 1.5] → [1.5, 1.2]; world.wind.period: 2 → 3" in err
+    assert _tree(out) == tree
+
+
+def test_no_empty_paired_json_and_the_start_used_is_stored(tmp_path):
+    world, _ = write_full_world(tmp_path / "w", beliefs=False)
+    out = tmp_path / "out"
+    assert main(_args(world, out, "--seeds", "2")) == 0
+    group = out / "stove-infotaxis"
+    assert not (group / "paired.json").exists()  # one policy/variant: nothing is paired, no file
+    (path,) = sorted((out / "runs").glob("*seed0.npz"))
+    run = load_search_run(path)
+    assert run.config["search"]["start"] == [1.5, 1.5]  # the world's start, not SearchConfig's default
+    assert run.config["key"]["search.start"] == [0.8, 6.0]  # the option as given is part of the key
+    assert run.position[0] == __import__("pytest").approx([1.5, 1.5], abs=0.1)
+    assert main(_args(world, out, "--seeds", "2", "--policies", "tour", "greedy")) == 0
+    paired = json.loads((group / "paired.json").read_text())
+    assert set(paired) == {"greedy/olfaction - tour/olfaction"}
