@@ -22,6 +22,7 @@ def main():
     print(f"D = {fit.diffusivity:.4g} m²/s, τ = {fit.lifetime:.4g} s, κ = {fit.encounter_scale:.4g} m²/s, "
           f"log L = {fit.log_likelihood:.2f}")
     print(f"residual lag-1 autocorrelation ρ = {cal.rho:.4f} -> tempering β = (1 − ρ)/(1 + ρ) = {cal.tempering:.4f}")
+    print(f"PMFS score exponent λ (log score of the known sources) = {cal.pmfs_tempering:.4f}")
     data = calibration_runs(config=config)
     for d, tau in ((0.03, 30.0), (0.01, 300.0)):
         kappa, ll = profile_log_likelihood(data, d, tau, false_hit_rate=config.false_hit_rate)

@@ -9,7 +9,10 @@ field — :func:`calibrate` fits
   anemometer readings (:class:`psgsl_pgm.olfaction.MeanWindEstimator`, all of its readings);
 * the tempering β of :class:`psgsl_pgm.olfaction.GridInfotaxis` from the lag-1 autocorrelation of the hit
   model's Pearson residuals along each run at the fitted parameters (:func:`psgsl_pgm.olfaction.ar1_tempering`:
-  β = n_eff / n = (1 − ρ̂)/(1 + ρ̂)).
+  β = n_eff / n = (1 − ρ̂)/(1 + ρ̂));
+* the exponent λ of the PMFS score (:class:`psgsl_pgm.olfaction.PMFSEstimator`, a pseudo-likelihood without
+  a reading-level model whose residuals could be used), by the log score of the known sources
+  (:func:`pmfs_tempering`).
 
 The values stored as :class:`ExperimentConfig` defaults are this fit's, rounded to three significant digits;
 ``benchmarks/calibrate_olfaction.py`` re-makes it and a slow test re-derives them.
@@ -21,15 +24,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..olfaction import (CalibrationRun, MeanWindEstimator, PlumeFit, PlumeModel, ar1_tempering,
-                         fit_plume_parameters, hit_residuals)
+from ..olfaction import (CalibrationRun, MeanWindEstimator, PlumeFit, PlumeModel, PMFSEstimator, ar1_tempering,
+                         fit_plume_parameters, hit_residuals, score_tempering)
 from ..sim import make_world
 from ._config import ExperimentConfig, parse_source
 from ._robot_models import wind_basis
 from ._run import walk
 from ._tour import exploration_tour
 
-__all__ = ["CALIBRATION_RUNS", "Calibration", "calibrate", "calibration_runs"]
+__all__ = ["CALIBRATION_RUNS", "Calibration", "calibrate", "calibration_runs", "pmfs_tempering"]
 
 #: (seed, source) of the calibration runs: seeds and sources disjoint from the evaluation's (oven, bed, the floor
 #: point 5.0,6.0; seeds 0–999); two floor points in the bedrooms, where the dead-end rooms are.
@@ -40,11 +43,13 @@ CALIBRATION_RUNS = ((1000, "toilet"), (1001, "couch"), (1002, "tv"), (1003, "ref
 @dataclass(frozen=True)
 class Calibration:
     """The fitted hit model: ``plume`` (D, τ, κ, log-likelihood), the residuals' pooled lag-1 autocorrelation
-    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), and the number of readings ``n``."""
+    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the PMFS score exponent ``pmfs_tempering``, and
+    the number of readings ``n``."""
 
     plume: PlumeFit
     rho: float
     tempering: float
+    pmfs_tempering: float
     n: int
 
 
@@ -60,13 +65,14 @@ def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None =
         world = make_world(seed=int(seed), source=parse_source(source), warm_up=config.warm_up)
         house = world.house
         wind = MeanWindEstimator(wind_basis(house), house.grid)
-        positions, hits = [], []
+        positions, hits, winds = [], [], []
         for _, stop, reading, w, _ in walk(world, exploration_tour(house), config, camera=False):
             wind.add(stop, w)
             positions.append(stop)
             hits.append(reading.hit)
+            winds.append(w)
         model = PlumeModel.from_grid_map(house.grid, wind.field(), outlets=house.outlet, cache_size=0)
-        out.append(CalibrationRun(model, tuple(world.source), np.array(positions), np.array(hits)))
+        out.append(CalibrationRun(model, tuple(world.source), np.array(positions), np.array(hits), np.array(winds)))
     return out
 
 
@@ -90,4 +96,28 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     data = calibration_runs(runs, config=config)
     fit = fit_plume_parameters(data, false_hit_rate=config.false_hit_rate, **fit_options)
     rho, beta = ar1_tempering(hit_residuals(data, fit, false_hit_rate=config.false_hit_rate))
-    return Calibration(fit, rho, beta, int(sum(len(r.hits) for r in data)))
+    return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)))
+
+
+def pmfs_tempering(data, fit: PlumeFit) -> float:
+    """The PMFS score exponent λ (:class:`psgsl_pgm.olfaction.PMFSEstimator` ``tempering``) that maximises the
+    log posterior of the known source at ¼, ½, ¾ and the end of every calibration run
+    (:func:`psgsl_pgm.olfaction.score_tempering`); the plume with the fitted (D, τ, κ) and each run's estimated
+    wind, a uniform prior over the free cells."""
+    scores, priors, truth = [], [], []
+    for run in data:
+        m = run.model
+        model = PlumeModel(m.geometry.occupancy, resolution=m.geometry.resolution, origin=m.geometry.origin,
+                           wind=m.wind, outlets=m.outlets, diffusivity=fit.diffusivity, lifetime=fit.lifetime,
+                           encounter_scale=fit.encounter_scale)
+        est = PMFSEstimator.from_model(model)
+        r, c = model.cell_of(run.source)
+        n = len(run.hits)
+        keep = {int(round(f * n)) for f in (0.25, 0.5, 0.75, 1.0)}
+        for j in range(n):
+            est.update(run.positions[j], bool(run.hits[j]), None if run.winds is None else run.winds[j])
+            if j + 1 in keep:
+                scores.append(est.score.ravel())
+                priors.append(est._log_prior)
+                truth.append(r * model.shape[1] + c)
+    return score_tempering(scores, priors, truth)

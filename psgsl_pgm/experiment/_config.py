@@ -46,6 +46,9 @@ class ExperimentConfig:
         β of :class:`psgsl_pgm.olfaction.GridInfotaxis`, from the same fit: the Pearson residuals of the hit model
         have pooled lag-1 autocorrelation ρ = 0.5414 along the calibration tours, β = (1 − ρ)/(1 + ρ) = 0.2976
         (the effective number of independent readings per reading of an AR(1) sequence).
+    pmfs_tempering : float
+        λ, the exponent of the score of :class:`psgsl_pgm.olfaction.PMFSEstimator`, fitted by the log score of the
+        known sources on the same calibration runs (:func:`pmfs_tempering`: 0.3801).
     false_hit_rate : float
         ε of :class:`psgsl_pgm.olfaction.GridInfotaxis` (held fixed in the fit).
     wind_refresh : float
@@ -67,6 +70,7 @@ class ExperimentConfig:
     lifetime: float = 284.0
     encounter_scale: float = 0.821
     tempering: float = 0.298
+    pmfs_tempering: float = 0.380
     false_hit_rate: float = 0.01
     wind_refresh: float = 0.05
     detector_model: str = "estimated"

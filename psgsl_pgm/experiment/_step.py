@@ -87,7 +87,7 @@ def make_estimator(name, model, config, *, prior=None):
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
                                         false_hit_rate=config.false_hit_rate)
     if name == "pmfs":
-        return PMFSEstimator.from_model(model, prior=prior)
+        return PMFSEstimator.from_model(model, prior=prior, tempering=config.pmfs_tempering)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 

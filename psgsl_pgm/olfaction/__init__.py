@@ -34,6 +34,7 @@ from ._calibrate import (
     hit_log_likelihood,
     hit_residuals,
     profile_log_likelihood,
+    score_tempering,
 )
 from ._hitmap import HitProbabilityMap
 from ._infotaxis import GridInfotaxis
@@ -62,6 +63,7 @@ __all__ = [
     "hit_log_likelihood",
     "hit_residuals",
     "profile_log_likelihood",
+    "score_tempering",
     "vergassola_concentration",
     "vergassola_encounter_rate",
     "vergassola_encounter_scale",

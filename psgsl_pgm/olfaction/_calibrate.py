@@ -13,7 +13,7 @@ from .._validate import as_array, as_float_array, describe, positive, unit_inter
 from ._plume import PlumeModel
 
 __all__ = ["CalibrationRun", "PlumeFit", "ar1_tempering", "encounter_scale_mle", "fit_encounter_scale",
-           "fit_plume_parameters", "hit_log_likelihood", "hit_residuals", "profile_log_likelihood"]
+           "fit_plume_parameters", "hit_log_likelihood", "hit_residuals", "profile_log_likelihood", "score_tempering"]
 
 
 def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit_rate: float = 0.0) -> float:
@@ -168,12 +168,15 @@ class CalibrationRun:
     positions : (n, 2) ndarray of float
         Sensor positions of the readings, in the order taken.
     hits : (n,) ndarray of bool
+    winds : (n, 2) ndarray of float or None
+        The anemometer readings (u_x, u_y) m/s taken with them, if kept.
     """
 
     model: PlumeModel
     source: tuple
     positions: np.ndarray
     hits: np.ndarray
+    winds: np.ndarray | None = None
 
     def __post_init__(self):
         if not isinstance(self.model, PlumeModel):
@@ -184,6 +187,11 @@ class CalibrationRun:
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "hits", _hits(self.hits, (len(pos),), "positions"))
         object.__setattr__(self, "source", tuple(float(v) for v in self.source))
+        if self.winds is not None:
+            w = as_float_array(self.winds, "winds", dtype=np.float64, ndim=2)
+            if w.shape != pos.shape or not np.isfinite(w).all():
+                raise ValueError(f"winds must be (n, 2) finite (u_x, u_y) like positions {pos.shape}, got {describe(w)}")
+            object.__setattr__(self, "winds", w)
         cells = np.array([self.model.cell_of(p, "positions[i]") for p in pos], dtype=np.int64).reshape(-1, 2)
         object.__setattr__(self, "_cells", cells)
 
@@ -300,6 +308,50 @@ def hit_residuals(runs, fit: PlumeFit, *, false_hit_rate: float = 0.0) -> list:
         p = np.clip(p, 1e-12, 1 - 1e-12)
         out.append((r.hits - p) / np.sqrt(p * (1 - p)))
     return out
+
+
+def score_tempering(scores, log_priors, true_cells) -> float:
+    """The exponent λ of a pseudo-likelihood score that maximises the log score of known sources.
+
+    For calibration posteriors p_i(s; λ) ∝ exp(log p_i(s) + λ S_i(s)) with known true cells t_i, λ maximises
+    Σ_i log p_i(t_i; λ) = Σ_i [λ S_i(t_i) + log p_i(t_i) − logsumexp_s(log p_i(s) + λ S_i(s))] — a proper
+    scoring rule, so the fitted posteriors are neither over- nor under-confident on average; the objective is
+    concave in λ (log-sum-exp is convex). Found by bounded Brent on log λ ∈ [−10, 5].
+
+    Parameters
+    ----------
+    scores : sequence of (N,) array_like of float
+        S_i over the candidate cells (finite where the prior is positive).
+    log_priors : sequence of (N,) array_like of float
+        log p_i(s) (−inf off the support).
+    true_cells : sequence of int
+        Flat index t_i of the true source cell (inside the support).
+
+    Returns
+    -------
+    lam : float
+    """
+    from scipy.optimize import minimize_scalar
+    from scipy.special import logsumexp
+
+    items = []
+    for i, (sc, lp, t) in enumerate(zip(scores, log_priors, true_cells)):
+        sc = as_float_array(sc, f"scores[{i}]", dtype=np.float64).ravel()
+        lp = as_float_array(lp, f"log_priors[{i}]", dtype=np.float64).ravel()
+        t = int(t)
+        if sc.shape != lp.shape or not 0 <= t < sc.size or not np.isfinite(lp[t]):
+            raise ValueError(f"scores[{i}], log_priors[{i}] must have one shape with true_cells[{i}] inside the support")
+        ok = np.isfinite(lp)
+        items.append((np.where(ok, sc, 0.0), lp, t))
+    if not items:
+        raise ValueError("scores must hold at least one calibration posterior")
+
+    def neg(log_lam):
+        lam = np.exp(log_lam)
+        return -sum(lam * sc[t] + lp[t] - logsumexp(lp + lam * sc) for sc, lp, t in items)
+
+    res = minimize_scalar(neg, bounds=(-10.0, 5.0), method="bounded", options={"xatol": 1e-8})
+    return float(np.exp(res.x))
 
 
 def ar1_tempering(residuals):

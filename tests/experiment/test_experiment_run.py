@@ -140,7 +140,7 @@ def test_calibration_runs_are_disjoint_from_evaluation_and_reference():
 @pytest.mark.slow
 def test_stored_plume_parameters_and_tempering_are_the_calibrated_ones():
     """D, τ, κ and β in ExperimentConfig are calibrate()'s maximum-likelihood fit on CALIBRATION_RUNS (D = 0.01312,
-    τ = 284.0, κ = 0.8213, β = 0.2976) to their three stored digits."""
+    τ = 284.0, κ = 0.8213, β = 0.2976, PMFS λ = 0.3801) to their three stored digits."""
     from psgsl_pgm.experiment import calibrate
 
     cal = calibrate()
@@ -149,3 +149,4 @@ def test_stored_plume_parameters_and_tempering_are_the_calibrated_ones():
     assert cfg.lifetime == pytest.approx(cal.plume.lifetime, rel=5e-3)
     assert cfg.encounter_scale == pytest.approx(cal.plume.encounter_scale, rel=5e-3)
     assert cfg.tempering == pytest.approx(cal.tempering, rel=5e-3)
+    assert cfg.pmfs_tempering == pytest.approx(cal.pmfs_tempering, rel=5e-3)

@@ -5,7 +5,7 @@ import pytest
 
 from psgsl_pgm import GridMap
 from psgsl_pgm.olfaction import (CalibrationRun, GridInfotaxis, MeanWindEstimator, PlumeModel, PMFSEstimator,
-                                 ar1_tempering, fit_plume_parameters, profile_log_likelihood)
+                                 ar1_tempering, fit_plume_parameters, profile_log_likelihood, score_tempering)
 
 
 def _smooth_field(shape, rng):
@@ -138,3 +138,39 @@ def test_replace_model_equals_a_fresh_estimator_on_the_new_model():
         assert moved.model is b and moved.n_observations == 12
     with pytest.raises(ValueError, match="same map"):
         GridInfotaxis.from_model(a).replace_model(PlumeModel(np.zeros((12, 16), bool), resolution=0.25))
+
+
+def test_score_tempering_recovers_the_exponent_of_sources_drawn_from_the_tempered_posterior():
+    rng = np.random.default_rng(5)
+    lam0, n_cells = 0.4, 300
+    scores, priors, truth = [], [], []
+    for _ in range(600):
+        s = rng.normal(0.0, 6.0, n_cells)
+        lp = np.full(n_cells, -np.log(n_cells))
+        lp[:10] = -np.inf  # cells off the support
+        p = np.exp(np.where(np.isfinite(lp), lam0 * s, -np.inf))
+        truth.append(rng.choice(n_cells, p=p / p.sum()))
+        scores.append(s)
+        priors.append(lp)
+    lam = score_tempering(scores, priors, truth)
+    assert lam == pytest.approx(lam0, rel=0.08)
+    # the maximiser: the objective is lower on either side
+    from scipy.special import logsumexp
+
+    def obj(x):
+        return sum(x * s[t] + lp[t] - logsumexp(lp + x * s) for s, lp, t in zip(scores, priors, truth))
+    assert obj(lam) > obj(lam * 1.05) and obj(lam) > obj(lam / 1.05)
+    with pytest.raises(ValueError, match="inside the support"):
+        score_tempering([np.zeros(3)], [np.array([0.0, -np.inf, 0.0])], [1])
+
+
+def test_pmfs_tempering_scales_the_log_score():
+    occ = np.zeros((8, 10), bool)
+    a = PMFSEstimator(occ, resolution=0.25)
+    b = PMFSEstimator(occ, resolution=0.25, tempering=0.3)
+    for x, h in (((0.6, 0.6), True), ((1.6, 1.1), False), ((2.1, 0.4), True)):
+        a.update(x, h, (0.1, 0.0))
+        b.update(x, h, (0.1, 0.0))
+    np.testing.assert_allclose(b.score, a.score, rtol=1e-12)
+    la, lb = a.log_posterior, b.log_posterior
+    np.testing.assert_allclose(lb - lb.max(), 0.3 * (la - la.max()), rtol=1e-10, atol=1e-12)
