@@ -1,6 +1,6 @@
 """Summarise calibration_check.py outputs (before / after) and draw the reliability diagram.
 
-    python benchmarks/calibration_report.py before.json after.json --figure docs/figures/reliability.png
+    python benchmarks/calibration_report.py before=before.json after=after.json --figure docs/figures/reliability.png
 """
 
 import argparse
@@ -12,8 +12,17 @@ import numpy as np
 from psgsl_pgm.experiment import plot_reliability, reliability_table
 
 
-def summary(path):
-    runs = json.load(open(path))["runs"]
+def load(spec):
+    """Runs of ``path[#estimator][,path[#estimator]...]`` (a ``#estimator`` keeps only that estimator's runs)."""
+    runs = []
+    for part in spec.split(","):
+        path, _, est = part.partition("#")
+        runs += [r for r in json.load(open(path))["runs"] if not est or r["estimator"] == est]
+    return runs
+
+
+def summary(spec):
+    runs = load(spec)
     rows = defaultdict(list)
     for r in runs:
         for v, cps in r["variants"].items():
@@ -33,7 +42,7 @@ def summary(path):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("files", nargs="+", help="label=path.json")
+    ap.add_argument("files", nargs="+", help="label=path.json[#estimator][,path.json[#estimator]...]")
     ap.add_argument("--figure")
     a = ap.parse_args()
     curves = {}
