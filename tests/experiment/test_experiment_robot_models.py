@@ -118,3 +118,20 @@ def test_frames_are_read_with_the_robot_detector_model():
     np.testing.assert_allclose(beliefs.maps["semantics"].probs, ref.probs, rtol=1e-12)
     with pytest.raises(ValueError, match="detector_model must be one of"):
         ExperimentConfig(detector_model="true")
+
+
+def test_both_estimators_get_the_calibrated_inputs():
+    from psgsl_pgm.experiment._step import make_estimator
+    from psgsl_pgm.olfaction import PlumeModel
+
+    cfg = ExperimentConfig(pmfs_tempering=0.37, tempering=0.29)
+    model = PlumeModel(np.zeros((6, 8), bool), resolution=0.25, diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
+                       encounter_scale=cfg.encounter_scale)
+    assert make_estimator("pmfs", model, cfg).tempering == 0.37
+    assert make_estimator("infotaxis", model, cfg).tempering == 0.29
+    world = make_world(seed=6, source="oven", warm_up=5.0)
+    for name in ("infotaxis", "pmfs"):
+        b = VariantPosteriors(world, name, cfg)
+        assert (b.model.diffusivity, b.model.lifetime, b.model.encounter_scale) == (
+            cfg.diffusivity, cfg.lifetime, cfg.encounter_scale)
+        assert not b.model.wind.any()  # still air until the first anemometer reading
