@@ -44,6 +44,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("files", nargs="+", help="label=path.json[#estimator][,path.json[#estimator]...]")
     ap.add_argument("--figure")
+    ap.add_argument("--title", default="Hit model on held-out seeds (fixed tour, true source)")
     a = ap.parse_args()
     curves = {}
     for item in a.files:
@@ -71,7 +72,7 @@ def main():
         print(f"  Bedroom stops with predicted in [0.07, 0.88]: n = {int((bed & (p >= 0.07) & (p <= 0.88)).sum())}, "
               f"hit rate = {g[bed & (p >= 0.07) & (p <= 0.88)].mean() if (bed & (p >= 0.07) & (p <= 0.88)).any() else float('nan'):.3f}")
     if a.figure:
-        plot_reliability(curves, a.figure, title="Hit model on held-out seeds (fixed tour, true source)")
+        plot_reliability(curves, a.figure, title=a.title)
 
 
 if __name__ == "__main__":
