@@ -13,11 +13,12 @@ the closed loop's, :mod:`psgsl_pgm.search`); :func:`run_experiment` a grid of so
 resumable); :func:`run_demo` the command ``psgsl demo``.
 """
 
-from ._calibration import CALIBRATION_RUNS, calibrate_encounter_scale
+from ._calibration import CALIBRATION_RUNS, Calibration, calibrate, calibration_runs
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
 from ._metrics import error_and_spread, mean_ci
+from ._reliability import plot_reliability, reliability_table
 from ..sim._house_ontology import house_ontology
 from ._run import RunResult, run_search
 from ._sources import check_sources
@@ -28,6 +29,7 @@ from ._tour import Tour, exploration_tour
 
 __all__ = [
     "CALIBRATION_RUNS",
+    "Calibration",
     "DEMO_SEEDS",
     "ESTIMATORS",
     "ExperimentConfig",
@@ -35,7 +37,8 @@ __all__ = [
     "Tour",
     "VARIANTS",
     "VariantPosteriors",
-    "calibrate_encounter_scale",
+    "calibrate",
+    "calibration_runs",
     "check_sources",
     "error_and_spread",
     "exploration_tour",
@@ -46,7 +49,9 @@ __all__ = [
     "parse_source",
     "plot_error_chart",
     "plot_progression",
+    "plot_reliability",
     "plot_room_types",
+    "reliability_table",
     "run_demo",
     "run_experiment",
     "run_search",

@@ -1,54 +1,123 @@
-"""Calibration of the plume model's encounter scale κ on runs that the evaluation never sees."""
+"""Calibration of the olfactory estimators on runs that the evaluation never sees.
+
+A calibration run is the fixed exploration tour in a house whose source is known (seeds 1000+, sources other
+than the evaluated ones). From its readings alone — gas hits and the anemometer, never the simulated wind
+field — :func:`calibrate` fits
+
+* the plume parameters (D, τ, κ) by maximum likelihood of the hit model (:func:`psgsl_pgm.olfaction.
+  fit_plume_parameters`), each run's plume solved with the mean wind the robot estimated from that run's
+  anemometer readings (:class:`psgsl_pgm.olfaction.MeanWindEstimator`, all of its readings);
+* the tempering β of :class:`psgsl_pgm.olfaction.GridInfotaxis` from the lag-1 autocorrelation of the hit
+  model's Pearson residuals along each run at the fitted parameters (:func:`psgsl_pgm.olfaction.ar1_tempering`:
+  β = n_eff / n = (1 − ρ̂)/(1 + ρ̂));
+* the exponent λ of the PMFS score (:class:`psgsl_pgm.olfaction.PMFSEstimator`, a pseudo-likelihood without
+  a reading-level model whose residuals could be used), by the log score of the known sources
+  (:func:`pmfs_tempering`).
+
+The values stored as :class:`ExperimentConfig` defaults are this fit's, rounded to three significant digits;
+``benchmarks/calibrate_olfaction.py`` re-makes it and a slow test re-derives them.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from ..olfaction import PlumeModel, encounter_scale_mle
+from ..olfaction import (CalibrationRun, MeanWindEstimator, PlumeFit, PlumeModel, PMFSEstimator, ar1_tempering,
+                         fit_plume_parameters, hit_residuals, score_tempering)
 from ..sim import make_world
 from ._config import ExperimentConfig, parse_source
+from ._robot_models import wind_basis
 from ._run import walk
 from ._tour import exploration_tour
 
-__all__ = ["CALIBRATION_RUNS", "calibrate_encounter_scale"]
+__all__ = ["CALIBRATION_RUNS", "Calibration", "calibrate", "calibration_runs", "pmfs_tempering"]
 
-#: (seed, source) of the calibration runs: seeds and source objects disjoint from the evaluation's.
-CALIBRATION_RUNS = ((1000, "toilet"), (1001, "couch"), (1002, "tv"), (1003, "refrigerator"))
+#: (seed, source) of the calibration runs: seeds and sources disjoint from the evaluation's (oven, bed, the floor
+#: point 5.0,6.0; seeds 0–999); two floor points in the bedrooms, where the dead-end rooms are.
+CALIBRATION_RUNS = ((1000, "toilet"), (1001, "couch"), (1002, "tv"), (1003, "refrigerator"), (1004, "sink"),
+                    (1005, "dining table"), (1006, "2.0,10.0"), (1007, "8.5,8.5"))
 
 
-def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> float:
-    """Maximum-likelihood κ pooled over calibration runs with known sources.
+@dataclass(frozen=True)
+class Calibration:
+    """The fitted hit model: ``plume`` (D, τ, κ, log-likelihood), the residuals' pooled lag-1 autocorrelation
+    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the PMFS score exponent ``pmfs_tempering``, and
+    the number of readings ``n``."""
 
-    Each run drives the exploration tour in ``make_world(seed=seed, source=source)`` and records the hit/miss
-    readings; with c_k = G(x_k | s_true) from the plume model (D, τ of ``config``; the run's mean wind), κ
-    maximises Π_k P(g_k | κ c_k), P(hit) = ε + (1 − ε)(1 − exp(−κ c)), over all readings of all runs
-    (:func:`psgsl_pgm.olfaction.encounter_scale_mle`).
+    plume: PlumeFit
+    rho: float
+    tempering: float
+    pmfs_tempering: float
+    n: int
 
-    Parameters
-    ----------
-    runs : sequence of (int, str or (2,) array_like)
-        (seed, source) pairs.
-    config : ExperimentConfig, optional, keyword-only
-        D, τ, ε, warm-up and robot timing; its ``encounter_scale`` is ignored.
 
-    Returns
-    -------
-    kappa : float
-        m²/s.
-    """
+def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> list:
+    """The :class:`psgsl_pgm.olfaction.CalibrationRun` of each (seed, source): the tour's readings, and a plume
+    model carrying the mean wind estimated from that run's own anemometer readings."""
     config = ExperimentConfig() if config is None else config
     runs = list(runs)
     if not runs:
         raise ValueError("runs must name at least one (seed, source) calibration run")
-    predicted, hits = [], []
+    out = []
     for seed, source in runs:
         world = make_world(seed=int(seed), source=parse_source(source), warm_up=config.warm_up)
-        model = PlumeModel.from_grid_map(world.house.grid, world.wind.mean().velocity, outlets=world.house.outlet,
-                                         diffusivity=config.diffusivity, lifetime=config.lifetime)
-        field = model.concentration(world.source)  # G(x | s_true) for every sensor cell x
-        tour = exploration_tour(world.house)
-        for _, stop, reading, _, _ in walk(world, tour, config, camera=False):
-            r, c = model.cell_of(stop)
-            predicted.append(field[r, c])
+        house = world.house
+        wind = MeanWindEstimator(wind_basis(house), house.grid)
+        positions, hits, winds = [], [], []
+        for _, stop, reading, w, _ in walk(world, exploration_tour(house), config, camera=False):
+            wind.add(stop, w)
+            positions.append(stop)
             hits.append(reading.hit)
-    return encounter_scale_mle(np.array(predicted), np.array(hits), false_hit_rate=config.false_hit_rate)
+            winds.append(w)
+        model = PlumeModel.from_grid_map(house.grid, wind.field(), outlets=house.outlet, cache_size=0)
+        out.append(CalibrationRun(model, tuple(world.source), np.array(positions), np.array(hits), np.array(winds)))
+    return out
+
+
+def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, **fit_options) -> Calibration:
+    """Fit (D, τ, κ) and the tempering on calibration runs (module docstring).
+
+    Parameters
+    ----------
+    runs : sequence of (int, str or (2,) array_like)
+        (seed, source) pairs (default :data:`CALIBRATION_RUNS`).
+    config : ExperimentConfig, optional, keyword-only
+        ε, warm-up and robot timing; its plume parameters and tempering are ignored.
+    **fit_options
+        Passed to :func:`psgsl_pgm.olfaction.fit_plume_parameters` (grids, ``refine``).
+
+    Returns
+    -------
+    Calibration
+    """
+    config = ExperimentConfig() if config is None else config
+    data = calibration_runs(runs, config=config)
+    fit = fit_plume_parameters(data, false_hit_rate=config.false_hit_rate, **fit_options)
+    rho, beta = ar1_tempering(hit_residuals(data, fit, false_hit_rate=config.false_hit_rate))
+    return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)))
+
+
+def pmfs_tempering(data, fit: PlumeFit) -> float:
+    """The PMFS score exponent λ (:class:`psgsl_pgm.olfaction.PMFSEstimator` ``tempering``) that maximises the
+    log posterior of the known source at ¼, ½, ¾ and the end of every calibration run
+    (:func:`psgsl_pgm.olfaction.score_tempering`); the plume with the fitted (D, τ, κ) and each run's estimated
+    wind, a uniform prior over the free cells."""
+    scores, priors, truth = [], [], []
+    for run in data:
+        m = run.model
+        model = PlumeModel(m.geometry.occupancy, resolution=m.geometry.resolution, origin=m.geometry.origin,
+                           wind=m.wind, outlets=m.outlets, diffusivity=fit.diffusivity, lifetime=fit.lifetime,
+                           encounter_scale=fit.encounter_scale)
+        est = PMFSEstimator.from_model(model)
+        r, c = model.cell_of(run.source)
+        n = len(run.hits)
+        keep = {int(round(f * n)) for f in (0.25, 0.5, 0.75, 1.0)}
+        for j in range(n):
+            est.update(run.positions[j], bool(run.hits[j]), None if run.winds is None else run.winds[j])
+            if j + 1 in keep:
+                scores.append(est.score.ravel())
+                priors.append(est._log_prior)
+                truth.append(r * model.shape[1] + c)
+    return score_tempering(scores, priors, truth)

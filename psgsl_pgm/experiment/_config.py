@@ -16,7 +16,11 @@ VARIANTS = ("olfaction", "semantics", "semantics+rooms")
 #: Olfactory estimators p(s | g) the experiment can run.
 ESTIMATORS = ("infotaxis", "pmfs")
 
-_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate"})
+_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate", "wind_refresh"})
+
+#: How the robot reads its camera's labels: with its detector model estimated on reference houses, or with the
+#: simulator's own (for measuring what the estimate changes).
+DETECTOR_MODELS = ("estimated", "simulator")
 
 
 @dataclass(frozen=True)
@@ -34,12 +38,25 @@ class ExperimentConfig:
     turn_time : float
         Seconds per camera heading at a look-around waypoint.
     diffusivity, lifetime, encounter_scale : float
-        Plume model of the olfactory estimators: D (m²/s), τ (s), κ (m²/s). D and τ are the values the olfaction
-        module's house tests use; κ is fitted by maximum likelihood on calibration runs
-        (:func:`calibrate_encounter_scale` on :data:`CALIBRATION_RUNS`, seeds and sources disjoint from the
-        evaluation, gives 2.3589; stored to three significant digits).
-    tempering, false_hit_rate : float
-        β and ε of :class:`psgsl_pgm.olfaction.GridInfotaxis`.
+        Plume model of the olfactory estimators: D (m²/s), τ (s), κ (m²/s), fitted by maximum likelihood of the
+        hit model on calibration runs (:func:`calibrate` on :data:`CALIBRATION_RUNS`: seeds and sources disjoint
+        from the evaluation, the wind estimated from the runs' own anemometer readings) — D = 0.01312,
+        τ = 284.0, κ = 0.8213 over 1491 readings, stored to three significant digits.
+    tempering : float
+        β of :class:`psgsl_pgm.olfaction.GridInfotaxis`, from the same fit: the Pearson residuals of the hit model
+        have pooled lag-1 autocorrelation ρ = 0.5414 along the calibration tours, β = (1 − ρ)/(1 + ρ) = 0.2976
+        (the effective number of independent readings per reading of an AR(1) sequence).
+    pmfs_tempering : float
+        λ, the exponent of the score of :class:`psgsl_pgm.olfaction.PMFSEstimator`, fitted by the log score of the
+        known sources on the same calibration runs (:func:`pmfs_tempering`: 0.3801).
+    false_hit_rate : float
+        ε of :class:`psgsl_pgm.olfaction.GridInfotaxis` (held fixed in the fit).
+    wind_refresh : float
+        The plume is re-solved with the robot's current wind estimate after its 1st, 2nd, 4th, 8th, … anemometer
+        reading when the estimate's coefficients moved by more than this fraction (in norm) since the last solve.
+    detector_model : {"estimated", "simulator"}
+        How camera labels are read: with the detector model estimated on reference houses (the robot's own), or
+        with the simulator's detector (to measure what the estimate changes).
     stops : int, optional
         Follow only the first ``stops`` stops of the tour (default: the whole tour). For quick checks and tests
         of the grid machinery; never part of a reported experiment.
@@ -49,11 +66,14 @@ class ExperimentConfig:
     warm_up: float = 60.0
     speed: float = 0.25
     turn_time: float = 1.0
-    diffusivity: float = 0.03
-    lifetime: float = 30.0
-    encounter_scale: float = 2.36
-    tempering: float = 0.5
+    diffusivity: float = 0.0131
+    lifetime: float = 284.0
+    encounter_scale: float = 0.821
+    tempering: float = 0.298
+    pmfs_tempering: float = 0.380
     false_hit_rate: float = 0.01
+    wind_refresh: float = 0.05
+    detector_model: str = "estimated"
     stops: int | None = None
 
     def __post_init__(self):
@@ -63,10 +83,12 @@ class ExperimentConfig:
                                        or self.stops < 1):
             raise ValueError(f"stops must be a positive integer or None (the whole tour), got {self.stops!r}")
         for f in fields(self):
-            if f.name in ("gas", "stops"):
+            if f.name in ("gas", "stops", "detector_model"):
                 continue
             v = positive(getattr(self, f.name), f.name, allow_zero=f.name in _MAY_BE_ZERO)  # bools, strings refused
             object.__setattr__(self, f.name, v)
+        if self.detector_model not in DETECTOR_MODELS:
+            raise ValueError(f"detector_model must be one of {DETECTOR_MODELS}, got {self.detector_model!r}")
         if not self.tempering <= 1 or not self.false_hit_rate < 1:
             raise ValueError(f"need tempering in (0, 1] and false_hit_rate in [0, 1), got {self.tempering!r}, "
                              f"{self.false_hit_rate!r}")

@@ -15,15 +15,18 @@ run's settings and makes its world, the same way for both.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .._beliefs import room_evidence, update_class_probs
 from .._class_beliefs import ClassBeliefMap
 from .._fusion import fuse
 from .._semantic import semantic_source_probability
-from ..olfaction import GridInfotaxis, PlumeModel, PMFSEstimator
+from ..olfaction import GridInfotaxis, MeanWindEstimator, PlumeModel, PMFSEstimator
 from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ._robot_models import robot_detector_model, wind_basis
 
 __all__ = ["VariantPosteriors", "make_estimator", "semantic_terms", "start_run", "visit"]
 
@@ -84,7 +87,7 @@ def make_estimator(name, model, config, *, prior=None):
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
                                         false_hit_rate=config.false_hit_rate)
     if name == "pmfs":
-        return PMFSEstimator.from_model(model, prior=prior)
+        return PMFSEstimator.from_model(model, prior=prior, tempering=config.pmfs_tempering)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 
@@ -133,6 +136,13 @@ class VariantPosteriors:
     likelihood, class_prior : (k,) ndarray
         p(o | s, γ) and β = p(o | ¬s) in the detector's class order.
     model : PlumeModel
+        The plume model in use (re-solved when the wind estimate moves, see :meth:`observe`).
+    wind : psgsl_pgm.olfaction.MeanWindEstimator
+        The robot's estimate of the mean flow from its anemometer readings.
+    detector_model : psgsl_pgm.sim.DetectorModel or None
+        The robot's model of its detector (estimated on reference houses), used to read the frames; ``None``
+        reads them with the simulator's detector (``config.detector_model == "simulator"``, or a world whose
+        classes have no reference houses).
     mapped : bool
         Whether the class beliefs come from a mapper (then the camera is not used).
     """
@@ -169,16 +179,50 @@ class VariantPosteriors:
             rooms = ClassBeliefMap.from_rooms(labels, room_table, beta, classes) if has_rooms else \
                 ClassBeliefMap.from_prior(house.shape, beta, classes)
         self.maps = {"semantics": plain, "semantics+rooms": rooms}
-        self.model = PlumeModel.from_grid_map(house.grid, world.wind.mean().velocity, outlets=house.outlet,
-                                              diffusivity=config.diffusivity, lifetime=config.lifetime,
-                                              encounter_scale=config.encounter_scale)
+        # the robot's own models, never the simulator's: the mean wind from its anemometer readings (a still-air
+        # plume until the first reading), the detector model counted on reference houses
+        self._config = config
+        self.wind = MeanWindEstimator(wind_basis(house), house.grid)
+        self._outlets = house.outlet
+        self._wind_solved = np.zeros(self.wind.basis.shape[0])  # coefficients behind the current plume model
+        self.n_wind_solves = 0
+        self.model = self._plume(self._wind_solved)
+        self.detector_model = robot_detector_model(classes) if config.detector_model == "estimated" else None
         self.estimator = make_estimator(estimator, self.model, config,
                                         prior=setting.region_mask(house).astype(np.float64))
 
+    def _plume(self, coefficients) -> PlumeModel:
+        """The plume model with the mean wind Σ a_k φ_k of ``coefficients`` (one sparse LU factorisation)."""
+        self.n_wind_solves += 1
+        cfg = self._config
+        return PlumeModel.from_grid_map(self.wind.grid, self.wind.field(coefficients), outlets=self._outlets,
+                                        diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
+                                        encounter_scale=cfg.encounter_scale)
+
+    def _refresh_wind(self) -> None:
+        """Re-solve the plume with the current wind estimate at readings 1, 2, 4, 8, … when the coefficients moved
+        by more than ``config.wind_refresh`` (relative, in norm) since the last solve; the estimator then
+        re-assimilates its readings under the new model (:meth:`OlfactoryEstimator.replace_model`)."""
+        n = self.wind.n_readings
+        if n & (n - 1):  # not a power of two
+            return
+        a = self.wind.coefficients
+        if np.linalg.norm(a - self._wind_solved) <= self._config.wind_refresh * np.linalg.norm(a):
+            return
+        self._wind_solved = a
+        self.model = self._plume(a)
+        self.estimator.replace_model(self.model)
+
     def observe(self, stop, reading, wind, frames) -> None:
-        """Assimilate one stop: the gas reading into p(s | g), every frame into both class-belief maps."""
+        """Assimilate one stop: the anemometer reading into the wind estimate (re-solving the plume on schedule),
+        the gas reading into p(s | g), every frame — read with the robot's detector model — into both
+        class-belief maps."""
+        self.wind.add(stop, wind)
+        self._refresh_wind()
         self.estimator.update(stop, reading.hit, wind)
         for frame in frames:
+            if self.detector_model is not None:  # the labels read with the robot's model of its detector
+                frame = replace(frame, likelihood=self.detector_model.likelihood(frame.labels, frame.distance))
             for m in self.maps.values():  # the same frames for both maps: one observation stream
                 m.observe(frame)
 

@@ -24,25 +24,46 @@ from ._analytic import (
     vergassola_encounter_scale,
 )
 from ._base import Observation, OlfactoryEstimator
-from ._calibrate import encounter_scale_mle, fit_encounter_scale
+from ._calibrate import (
+    CalibrationRun,
+    PlumeFit,
+    ar1_tempering,
+    encounter_scale_mle,
+    fit_encounter_scale,
+    fit_plume_parameters,
+    hit_log_likelihood,
+    hit_residuals,
+    profile_log_likelihood,
+    score_tempering,
+)
 from ._hitmap import HitProbabilityMap
 from ._infotaxis import GridInfotaxis
 from ._operator import advection_diffusion_operator, bernoulli
 from ._plume import PlumeModel
 from ._pmfs import PMFSEstimator
+from ._wind_estimate import MeanWindEstimator
 
 __all__ = [
+    "CalibrationRun",
     "GridInfotaxis",
     "HitProbabilityMap",
+    "MeanWindEstimator",
     "Observation",
     "OlfactoryEstimator",
     "PMFSEstimator",
+    "PlumeFit",
     "PlumeModel",
     "advection_diffusion_operator",
+    "ar1_tempering",
     "bernoulli",
     "correlation_length",
     "encounter_scale_mle",
     "fit_encounter_scale",
+    "fit_plume_parameters",
+    "hit_log_likelihood",
+    "hit_residuals",
+    "profile_log_likelihood",
+    "score_tempering",
     "vergassola_concentration",
     "vergassola_encounter_rate",
     "vergassola_encounter_scale",

@@ -157,6 +157,28 @@ class OlfactoryEstimator(abc.ABC):
         self._set_log_posterior(log_target)
         return self.posterior
 
+    def replace_model(self, model: PlumeModel) -> np.ndarray:
+        """Re-assimilate every reading so far under a new plume model of the same map (e.g. one solved with a
+        refreshed wind estimate) and return the new posterior.
+
+        The prior (and anything folded into it) is kept; the subclass state is rebuilt by replaying the stored
+        observations in order, so the result equals a fresh estimator on ``model`` fed the same readings.
+        Cost: one adjoint solve per distinct sensor cell visited, on ``model``'s (empty) cache.
+        """
+        if not isinstance(model, PlumeModel):
+            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+        if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
+                                                                             self.geometry.occupancy):
+            raise ValueError(f"model must be on the same map ({self.geometry.shape} cells, same walls)")
+        self.model = model
+        self._reset_state()
+        log_post = self._log_prior.copy()
+        for obs in self._observations:
+            log_post, payload = self._propose(obs)
+            self._accept(obs, payload)
+        self._set_log_posterior(log_post)
+        return self.posterior
+
     # --- read-out -------------------------------------------------------------------------------------------
     @property
     def posterior(self) -> np.ndarray:

@@ -38,7 +38,9 @@ class GridInfotaxis(OlfactoryEstimator):
     each factor to β = n_eff / n ∈ (0, 1] (Grünwald's "safe Bayes"; Miller & Dunson 2019, JASA 114, 1113), so
     that the posterior contracts as if only βn readings were independent. The default β = 0.5 assumes each
     reading shares roughly half of its information with its neighbours along the path (stops about one plume
-    correlation length apart); β = 1 recovers Vergassola's exact update and is right for readings that are
+    correlation length apart); estimate it from data instead where there are readings around known sources:
+    :func:`ar1_tempering` turns the lag-1 autocorrelation ρ of the hit model's residuals into
+    β = (1 − ρ)/(1 + ρ) (the validation experiment does so on its calibration runs); β = 1 recovers Vergassola's exact update and is right for readings that are
     independent draws from the model (as in the tests). The estimator is further meant to be called once per
     stop (one reading per stop — several readings at one stop sample the same puffs): that convention, not
     β, removes the strongest correlation, so β need not be tiny. The estimator is deterministic (no random
@@ -70,8 +72,9 @@ class GridInfotaxis(OlfactoryEstimator):
     Notes
     -----
     The anemometer reading passed to :meth:`update` is validated and stored with the observation but does not
-    enter the likelihood: the plume model uses the full wind field given at construction (the simulated one),
-    of which the anemometer is one noisy sample.
+    enter the likelihood: the plume model uses the mean wind field it was built with — in the validation
+    experiment the robot's own estimate from its anemometer readings (:class:`MeanWindEstimator`), the plume
+    re-solved as the estimate moves (:meth:`replace_model`).
 
     Examples
     --------

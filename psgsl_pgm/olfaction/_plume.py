@@ -75,7 +75,8 @@ class PlumeModel:
     -----
     The defaults are illustrative, not calibrated: with D = 0.05 m²/s, τ = 20 s and κ = 0.4 m²/s, a source in
     open space with a 0.1 m/s wind gives P(hit) ≈ 0.56 one metre downwind and ≈ 0.11 one metre upwind
-    (h = 0.1 m). Calibrate D, τ and κ against the gas simulator before drawing conclusions.
+    (h = 0.1 m). Calibrate D, τ and κ on readings around known sources before drawing conclusions
+    (:func:`fit_plume_parameters`).
     boundary : {"wall", "open"}, default "wall"
         The map border: no-flux wall, or absorbing free space.
     scheme : {"exponential", "upwind"}, default "exponential"

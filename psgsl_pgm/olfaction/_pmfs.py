@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import unit_interval
+from .._validate import positive, unit_interval
 from ._base import Observation, OlfactoryEstimator
 from ._hitmap import HitProbabilityMap
 from ._plume import PlumeModel
@@ -24,9 +24,10 @@ class PMFSEstimator(OlfactoryEstimator):
         p(s | g) ∝ p(s) · Π_c [1 − γ · conf_c · |ĥ_c − h_c(s)|],            (PMFS score)
 
     computed as a sum of ``log1p`` terms. Every factor lies in [1 − γ, 1], so no single cell can veto a
-    source: the score is a bounded pseudo-likelihood, robust to correlated readings by construction (no
-    tempering needed), and the posterior is recomputed from the current hit map after each reading rather than
-    multiplied up over time.
+    source: the score is a bounded pseudo-likelihood, and the posterior is recomputed from the current hit map
+    after each reading rather than multiplied up over time. Its sharpness is still not a probability statement
+    (it grows with the number of compared cells): the exponent λ (``tempering``) rescales it, p(s | g) ∝
+    p(s) · (Π_c [...])^λ, and is fitted on calibration runs (:func:`score_tempering`).
 
     Simplifications with respect to PMFS, and why:
 
@@ -60,6 +61,10 @@ class PMFSEstimator(OlfactoryEstimator):
         Prior p(s); uniform over free cells by default.
     discrimination : float, default 0.9
         γ ∈ (0, 1): PMFS' ``sourceDiscriminationPower``; γ < 1 keeps every factor positive.
+    tempering : float, default 1.0
+        λ > 0, the exponent of the score: p(s | g) ∝ p(s) · (Π_c [...])^λ. The PMFS score is a pseudo-likelihood
+        whose sharpness is not a probability statement; λ rescales it so that its posterior is calibrated
+        (fitted by the log score of known sources on calibration runs in the experiment); 1 is PMFS itself.
     prior_hit, prior_strength, kernel_sigma, kernel_stretch, confidence_scale, cutoff
         Options of :class:`HitProbabilityMap`.
     **plume : keyword arguments
@@ -91,20 +96,22 @@ class PMFSEstimator(OlfactoryEstimator):
         outlets=None,
         prior=None,
         discrimination: float = 0.9,
+        tempering: float = 1.0,
         **kwargs,
     ):
         hitmap = {k: kwargs.pop(k) for k in _HITMAP_KEYS if k in kwargs}
         model = PlumeModel(occupancy, resolution=resolution, origin=origin, wind=wind, outlets=outlets, **kwargs)
-        self._configure(model, discrimination, hitmap)
+        self._configure(model, discrimination, hitmap, tempering)
         super().__init__(model, prior=prior)
 
     @classmethod
-    def from_model(cls, model: PlumeModel, *, prior=None, discrimination: float = 0.9, **hitmap) -> "PMFSEstimator":
+    def from_model(cls, model: PlumeModel, *, prior=None, discrimination: float = 0.9, tempering: float = 1.0,
+                   **hitmap) -> "PMFSEstimator":
         """Estimator on an existing :class:`PlumeModel` (shares its factorisation and Green's-function cache)."""
         if not isinstance(model, PlumeModel):
             raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
         self = cls.__new__(cls)
-        self._configure(model, discrimination, hitmap)
+        self._configure(model, discrimination, hitmap, tempering)
         OlfactoryEstimator.__init__(self, model, prior=prior)
         return self
 
@@ -114,15 +121,16 @@ class PMFSEstimator(OlfactoryEstimator):
 
         ``wind`` is the (H, W, 2) wind field in m/s; remaining keywords as in the constructor.
         """
-        opts = {k: kwargs.pop(k) for k in ("discrimination",) + _HITMAP_KEYS if k in kwargs}
+        opts = {k: kwargs.pop(k) for k in ("discrimination", "tempering") + _HITMAP_KEYS if k in kwargs}
         model = PlumeModel.from_grid_map(grid_map, wind, outlets=outlets, **kwargs)
         return cls.from_model(model, prior=prior, **opts)
 
-    def _configure(self, model: PlumeModel, discrimination, hitmap: dict) -> None:
+    def _configure(self, model: PlumeModel, discrimination, hitmap: dict, tempering=1.0) -> None:
         unknown = set(hitmap) - set(_HITMAP_KEYS)
         if unknown:
             raise TypeError(f"unexpected keyword argument(s) {sorted(unknown)}; hit-map options are {_HITMAP_KEYS}")
         self.discrimination = unit_interval(discrimination, "discrimination", low_open=True, high_open=True)
+        self.tempering = positive(tempering, "tempering")
         self._hitmap = HitProbabilityMap(model.geometry, **hitmap)
 
     # --- state ----------------------------------------------------------------------------------------------
@@ -164,7 +172,7 @@ class PMFSEstimator(OlfactoryEstimator):
             score += self._log_factors(changed, h_obs[changed], conf[changed])
         if new:
             score += self._log_factors(np.array([k]), h_obs[k:], conf[k:])
-        return self._log_prior + score, (hitmap, new, flat, score, h_obs, conf)
+        return self._log_prior + self.tempering * score, (hitmap, new, flat, score, h_obs, conf)
 
     def _accept(self, obs: Observation, payload) -> None:
         hitmap, new, flat, score, h_obs, conf = payload
@@ -174,6 +182,11 @@ class PMFSEstimator(OlfactoryEstimator):
         if new:
             self._slot[flat] = len(self._cells)
             self._cells.append(flat)
+
+    @property
+    def score(self) -> np.ndarray:
+        """(H, W) the untempered PMFS score Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|] of every candidate s (a copy)."""
+        return self._score.reshape(self.geometry.shape).copy()
 
     @property
     def hit_map(self) -> HitProbabilityMap:

@@ -156,7 +156,12 @@ def _found_mass(sit: Situation, cells):
 
 
 def _hit_rows(sit: Situation, cells):
-    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b, cached per cell for the run."""
+    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b, cached per cell for the run (and emptied when
+    the estimator's plume model is re-solved with a new wind estimate)."""
+    model = sit.beliefs.estimator.model
+    if sit.cache.get("model") is not model:
+        sit.cache.clear()
+        sit.cache["model"] = model
     cells = np.asarray(cells).tolist()
     missing = [c for c in cells if c not in sit.cache]
     if missing:

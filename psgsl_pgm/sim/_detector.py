@@ -126,6 +126,78 @@ class DetectorModel:
                 conf[i, j] = 1.0 - (leak if rest else 0.0)
         return cls(classes, conf, **kwargs)
 
+    @classmethod
+    def from_counts(cls, classes, true_classes, labels, distance, *, pseudo_count: float = 1.0) -> "DetectorModel":
+        """The detector model estimated from labelled observations (class truth known, e.g. reference houses).
+
+        * confusion C[i, j]: Dirichlet-smoothed frequencies, (n_ij + α) / (n_i + (k − 1) α), of label j among
+          the detections on class i (α = ``pseudo_count``; the row of ``"other"`` from its false positives);
+        * ``false_positive``: (n_fp + α) / (n_other + 2α), detections among the ``"other"`` observations;
+        * (p_max, near, scale) of p_d(d): maximum likelihood on the detected / not-detected events of the object
+          cells (Bernoulli with p_d(d_n); Nelder–Mead on (logit p_max, log near, log scale), from the
+          moment-like start p_max = detection rate below the median distance).
+
+        Parameters
+        ----------
+        classes : tuple of str
+            The k classes (with ``"other"``), in the order ``true_classes`` indexes.
+        true_classes, labels : (n,) array_like of int
+            True class of each observation, and the reported label (index into the labels, ``"nothing"`` = k − 1).
+        distance : (n,) array_like of float
+            Camera–cell distances, metres.
+        pseudo_count : float, keyword-only
+            α > 0.
+
+        Returns
+        -------
+        DetectorModel
+        """
+        from scipy.optimize import minimize
+
+        classes = tuple(str(c) for c in classes)
+        if OTHER not in classes:
+            raise ValueError(f"classes must include {OTHER!r}, got {classes}")
+        k = len(classes)
+        c = np.asarray(true_classes)
+        z = np.asarray(labels)
+        d = np.asarray(distance, dtype=np.float64)
+        if not (np.issubdtype(c.dtype, np.integer) and np.issubdtype(z.dtype, np.integer)) or not (
+                c.shape == z.shape == d.shape) or c.ndim != 1:
+            raise ValueError(f"true_classes, labels (int) and distance must be (n,) arrays of one length, got "
+                             f"{c.shape}, {z.shape}, {d.shape}")
+        if c.size and (c.min() < 0 or c.max() >= k or z.min() < 0 or z.max() >= k):
+            raise ValueError(f"true_classes and labels must lie in [0, {k}), got [{c.min()}, {c.max()}] and "
+                             f"[{z.min()}, {z.max()}]")
+        if not (np.isfinite(pseudo_count) and pseudo_count > 0):
+            raise ValueError(f"pseudo_count must be a positive number, got {pseudo_count!r}")
+        nothing = k - 1
+        det = z != nothing
+        counts = np.zeros((k, k - 1))
+        np.add.at(counts, (c[det], z[det]), 1.0)
+        confusion = (counts + pseudo_count) / (counts + pseudo_count).sum(axis=1, keepdims=True)
+        other = classes.index(OTHER)
+        is_other = c == other
+        false_positive = (det[is_other].sum() + pseudo_count) / (is_other.sum() + 2 * pseudo_count)
+        obj_d, obj_det = d[~is_other], det[~is_other]
+        if obj_d.size == 0:
+            raise ValueError("true_classes must include observations of object cells to fit the detection curve")
+
+        def unpack(x):
+            return 1.0 / (1.0 + np.exp(-x[0])), float(np.exp(x[1])), float(np.exp(x[2]))
+
+        def nll(x):
+            p_max, near, scale = unpack(x)
+            p = np.clip(p_max * np.exp(-np.maximum(obj_d - near, 0.0) / scale), 1e-15, 1 - 1e-15)
+            return -float(np.where(obj_det, np.log(p), np.log1p(-p)).sum())
+
+        med = float(np.median(obj_d))
+        rate = float(np.clip(obj_det[obj_d <= med].mean(), 0.01, 0.99))
+        x0 = np.array([np.log(rate / (1 - rate)), np.log(max(med / 2, 0.05)), np.log(max(med, 0.1))])
+        res = minimize(nll, x0, method="Nelder-Mead", options={"xatol": 1e-6, "fatol": 1e-8, "maxiter": 4000})
+        p_max, near, scale = unpack(res.x)
+        return cls(classes, confusion, p_max=float(p_max), near=near, scale=scale,
+                   false_positive=float(false_positive))
+
     @property
     def labels(self) -> tuple:
         """Label names: the object classes then ``"nothing"``."""

@@ -55,7 +55,7 @@ def test_a_short_infotaxis_run_is_consistent(house_space):
 
 def test_found_on_the_way_within_the_radius(house_space):
     _, space = house_space
-    run = run_closed_loop("2.3,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0),
+    run = run_closed_loop("2.0,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0),
                           space=space)
     assert run.found
     d = np.linalg.norm(run.path - run.source_xy, axis=1)

@@ -161,7 +161,7 @@ def test_space_aware_gain_on_a_certain_belief_is_the_drive_saved(situation):
 
 
 @pytest.mark.parametrize("policy, gain_of, differ", [("infotaxis", infotaxis_gain, True),
-                                                     ("space-aware-infotaxis", space_aware_gain, False)])
+                                                     ("space-aware-infotaxis", space_aware_gain, True)])
 def test_the_scoring_rule_picks_the_best_gain_per_second_or_the_best_gain(situation, policy, gain_of, differ):
     from psgsl_pgm.search import SCORES, choose
     from psgsl_pgm.search._policies import _wrap
@@ -185,3 +185,25 @@ def test_the_scoring_rule_picks_the_best_gain_per_second_or_the_best_gain(situat
     assert gain[chosen["gain"]] >= gain[chosen["per-time"]] > 0 and tau[chosen["gain"]] >= tau[chosen["per-time"]]
     with pytest.raises(ValueError, match=r"score must be one of \('per-time', 'gain'\), got 'fastest'"):
         choose(policy, Situation(**{**sit.__dict__, "score": "fastest"}))
+
+
+def test_hit_rows_follow_a_re_solved_plume_model(house_space, situation):
+    """The per-run cache of hit-model rows is emptied when the plume is re-solved with a new wind estimate."""
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.experiment._step import VariantPosteriors
+    from psgsl_pgm.olfaction import PlumeModel
+    from psgsl_pgm.search._policies import _hit_rows
+    from psgsl_pgm.sim import make_world
+
+    house, space = house_space
+    beliefs = VariantPosteriors(make_world(house, seed=1, warm_up=5.0), "infotaxis", ExperimentConfig())
+    sit = Situation(**{**situation.__dict__, "beliefs": beliefs, "cache": {}})
+    cells = space.candidates(sit.cell, 1.0)[0][:3]
+    before, _ = _hit_rows(sit, cells)
+    wind = np.zeros(house.shape + (2,))
+    wind[house.grid.free, 0] = 0.3
+    beliefs.estimator.replace_model(PlumeModel.from_grid_map(house.grid, wind, outlets=house.outlet))
+    after, _ = _hit_rows(sit, cells)
+    want = beliefs.estimator.hit_probability(space.position(cells)).reshape(len(cells), -1)
+    np.testing.assert_array_equal(after, want)
+    assert not np.allclose(after, before)

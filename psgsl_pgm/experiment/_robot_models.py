@@ -1,0 +1,99 @@
+"""What the robot brings to a house instead of the simulator's truth: the basis of its wind estimate, and its
+detector model estimated on reference houses.
+
+* **Wind.** The mean flow through a house is driven by its windows: its shape is the potential flow from the
+  inlet windows to the outlet windows of the map (:func:`psgsl_pgm.sim.potential_flow` at unit mean speed), a
+  property of the floor plan alone; its strength and sign are what the anemometer readings fix
+  (:class:`psgsl_pgm.olfaction.MeanWindEstimator`, one least-squares coefficient). A map without both kinds of
+  window (e.g. a world file with a CFD export and no windows) gets the two uniform flows along x and y.
+* **Detector.** The robot's p(label | class, distance) is counted from camera frames taken along the exploration
+  tour of the *reference* houses (the seeds that also give p(o) and p(o | room), never evaluated), labelled by
+  the simulator's detector and compared with those houses' true class maps
+  (:meth:`psgsl_pgm.sim.DetectorModel.from_counts`: Dirichlet-smoothed confusion, false-positive rate, and the
+  maximum-likelihood detection curve). The evaluation's frames are then *read* with this estimate, while they
+  are *made* by the simulator's detector.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from ..sim import Camera, DetectorModel, HOUSE_CLASSES, default_house, potential_flow, take_frame
+from ..sim._classes import OTHER, match_names
+from ..sim._house_ontology import REFERENCE_SEEDS
+from ._tour import exploration_tour
+
+__all__ = ["robot_detector_model", "wind_basis"]
+
+_STOP_STRIDE = 3  # frames at every third stop of each reference tour (~10^6 labelled cells over ten houses)
+
+
+def wind_basis(house) -> np.ndarray:
+    """(K, H, W, 2) basis fields of the robot's mean-wind estimate in ``house`` (see the module docstring).
+
+    K = 1 (the unit-mean-speed potential flow from the inlet to the outlet windows) when the map has both, else
+    K = 2 (uniform unit flows along x and along y on the free cells).
+    """
+    grid = house.grid
+    if house.inlet.any() and house.outlet.any():
+        flow = potential_flow(grid, house.inlet, house.outlet, mean_speed=1.0).velocity
+        return np.where(grid.free[..., None], flow, 0.0)[None]
+    basis = np.zeros((2,) + grid.shape + (2,))
+    basis[0, ..., 0] = grid.free
+    basis[1, ..., 1] = grid.free
+    return basis
+
+
+@lru_cache(maxsize=4)
+def _estimated(seeds: tuple, pseudo_count: float, frame_seed: int) -> DetectorModel:
+    truth_c, labels, dist = [], [], []
+    classes = None
+    rng = np.random.default_rng(frame_seed)
+    camera = Camera()
+    for s in seeds:
+        house = default_house(s)
+        detector = DetectorModel.default(house.classes)  # the reference house's (simulated) detector
+        classes = detector.classes if classes is None else classes
+        idx = match_names(house.classes, classes)
+        idx = np.where(idx < 0, list(classes).index(OTHER), idx)
+        truth = idx[house.class_map]
+        tour = exploration_tour(house)
+        for stop, headings in zip(tour.stops[::_STOP_STRIDE], tour.headings[::_STOP_STRIDE]):
+            for heading in headings:
+                frame = take_frame(house, (stop[0], stop[1], heading), camera=camera, detector=detector, rng=rng)
+                truth_c.append(truth[frame.cells[:, 0], frame.cells[:, 1]])
+                labels.append(frame.labels)
+                dist.append(frame.distance)
+    return DetectorModel.from_counts(classes, np.concatenate(truth_c), np.concatenate(labels), np.concatenate(dist),
+                                     pseudo_count=pseudo_count)
+
+
+def robot_detector_model(classes=HOUSE_CLASSES, *, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0,
+                         frame_seed: int = 0) -> DetectorModel | None:
+    """The robot's detector model, estimated from frames of the reference houses (module docstring).
+
+    Parameters
+    ----------
+    classes : tuple of str
+        The classes of the detector to be modelled; ``None`` is returned unless they are the reference houses'
+        classes (a world with other classes has no reference frames: its detector is then read with the
+        simulator's own model, and the caller says so).
+    reference_seeds : tuple of int, keyword-only
+        Houses never evaluated (default: those of :func:`psgsl_pgm.sim.house_ontology`).
+    pseudo_count : float, keyword-only
+        Dirichlet α of :meth:`DetectorModel.from_counts`.
+    frame_seed : int, keyword-only
+        Seed of the detector's random labels on the reference frames.
+
+    Returns
+    -------
+    DetectorModel or None
+    """
+    if tuple(classes) != tuple(HOUSE_CLASSES):
+        return None
+    seeds = tuple(int(s) for s in reference_seeds)
+    if not seeds:
+        raise ValueError("reference_seeds must name at least one reference house")
+    return _estimated(seeds, float(pseudo_count), int(frame_seed))

@@ -1,0 +1,137 @@
+"""The robot's own models in the experiment: wind from its anemometer, its detector model from reference houses."""
+
+import sys
+
+import numpy as np
+import pytest
+
+from psgsl_pgm.experiment import ExperimentConfig, VariantPosteriors
+from psgsl_pgm.experiment._robot_models import robot_detector_model, wind_basis
+from psgsl_pgm.experiment._run import walk
+from psgsl_pgm.experiment._tour import exploration_tour
+from psgsl_pgm.sim import HOUSE_CLASSES, DetectorModel, make_world
+
+
+class _SimulatorOnlyWind:
+    """The world's wind, readable only from the simulator's own modules (psgsl_pgm.sim.*)."""
+
+    def __init__(self, wind):
+        object.__setattr__(self, "_wind", wind)
+
+    def __getattr__(self, name):
+        caller = sys._getframe(1).f_globals.get("__name__", "")
+        if not caller.startswith("psgsl_pgm.sim"):
+            raise RuntimeError(f"{caller} read the simulator's wind field (.{name})")
+        return getattr(object.__getattribute__(self, "_wind"), name)
+
+
+@pytest.fixture(scope="module")
+def guarded_world():
+    world = make_world(seed=3, source="oven", warm_up=20.0)
+    world.wind = _SimulatorOnlyWind(world.wind)
+    return world
+
+
+def test_the_guard_catches_a_read_of_the_wind_field(guarded_world):
+    with pytest.raises(RuntimeError, match="read the simulator's wind field"):
+        guarded_world.wind.mean()
+
+
+@pytest.mark.parametrize("estimator", ["infotaxis", "pmfs"])
+def test_no_estimator_code_path_reads_the_simulated_wind(guarded_world, estimator):
+    config = ExperimentConfig(stops=12)
+    beliefs = VariantPosteriors(guarded_world, estimator, config)
+    tour = exploration_tour(guarded_world.house).first(12)
+    for _, stop, reading, wind, frames in walk(guarded_world, tour, config):
+        beliefs.observe(stop, reading, wind, frames)
+        beliefs.posteriors()
+        beliefs.estimator.information_gain([stop])
+    assert beliefs.wind.n_readings == 12
+    # re-solved at readings 1, 2, 4, 8 at most (and once for the still-air start)
+    assert 2 <= beliefs.n_wind_solves <= 5
+
+
+def test_wind_estimate_finds_the_through_flow_of_a_house():
+    """The house's mean flow is the inlet→outlet potential flow at 0.2 m/s mean speed plus the time-mean of the
+    eddies: after a whole tour the coefficient of the unit-speed basis is the through-flow speed to ±15 %."""
+    world = make_world(seed=5, source="oven", warm_up=10.0)
+    config = ExperimentConfig()
+    beliefs = VariantPosteriors(world, "pmfs", config)
+    for _, stop, reading, wind, _ in walk(world, exploration_tour(world.house), config, camera=False):
+        beliefs.wind.add(stop, wind)
+    a = beliefs.wind.coefficients
+    assert a.shape == (1,) and a[0] == pytest.approx(0.2, rel=0.15)
+    truth = world.wind.mean().velocity  # the test, not the estimator, may read the truth
+    free = world.house.grid.free
+    est = beliefs.wind.field()
+    assert np.linalg.norm((est - truth)[free]) < 0.6 * np.linalg.norm(truth[free])
+
+
+def test_wind_basis_without_windows_is_the_two_uniform_flows():
+    world = make_world(seed=0, warm_up=0.0)
+    house = world.house
+    house_no_windows = type("H", (), {"grid": house.grid, "inlet": np.zeros_like(house.inlet),
+                                      "outlet": house.outlet})()
+    b = wind_basis(house_no_windows)
+    assert b.shape == (2,) + house.shape + (2,)
+    assert (b[0, ..., 0] == house.grid.free).all() and (b[1, ..., 1] == house.grid.free).all()
+    assert not b[0, ..., 1].any() and not b[1, ..., 0].any()
+
+
+def test_detector_estimate_converges_to_the_true_confusion_matrix():
+    rng = np.random.default_rng(0)
+    true = DetectorModel.default(HOUSE_CLASSES, p_max=0.8, near=1.5, scale=2.0, false_positive=0.05)
+    k = len(true.classes)
+    n = 400_000
+    c = rng.integers(0, k, n)
+    d = rng.uniform(0.2, 6.0, n)
+    z = true.sample(c, d, rng)
+    est = DetectorModel.from_counts(true.classes, c, z, d, pseudo_count=1.0)
+    # every entry within 5 binomial standard errors of its row's detections (≈ n / k · p_d each)
+    det = z != true.nothing
+    n_row = np.bincount(c[det], minlength=k)
+    se = np.sqrt(true.confusion * (1 - true.confusion) / n_row[:, None]) + 1.0 / n_row[:, None]
+    assert (np.abs(est.confusion - true.confusion) < 5 * se).all()
+    assert est.p_max == pytest.approx(0.8, abs=0.01)
+    assert est.near == pytest.approx(1.5, abs=0.1)
+    assert est.scale == pytest.approx(2.0, rel=0.05)
+    assert est.false_positive == pytest.approx(0.05, abs=0.003)
+    with pytest.raises(ValueError, match="must lie in"):
+        DetectorModel.from_counts(true.classes, c[:5], z[:5] + k, d[:5])
+
+
+def test_frames_are_read_with_the_robot_detector_model():
+    world = make_world(seed=4, source="oven", warm_up=5.0)
+    config = ExperimentConfig(stops=3)
+    beliefs = VariantPosteriors(world, "pmfs", config)
+    robot = robot_detector_model()
+    assert beliefs.detector_model is robot and robot is not world.detector
+    assert not np.array_equal(robot.confusion, world.detector.confusion)
+    twin = VariantPosteriors(world, "pmfs", ExperimentConfig(stops=3, detector_model="simulator"))
+    assert twin.detector_model is None
+    frame = world.camera_frame((2.0, 6.0, 0.0))
+    beliefs.observe((2.0, 6.0), world.sense_gas((2.0, 6.0)), world.sense_wind((2.0, 6.0)), [frame])
+    reread = robot.likelihood(frame.labels, frame.distance)
+    from psgsl_pgm._class_beliefs import ClassBeliefMap
+    ref = ClassBeliefMap.from_prior(world.house.shape, beliefs.class_prior, world.detector.classes)
+    ref._apply(frame.cells, reread, None)
+    np.testing.assert_allclose(beliefs.maps["semantics"].probs, ref.probs, rtol=1e-12)
+    with pytest.raises(ValueError, match="detector_model must be one of"):
+        ExperimentConfig(detector_model="true")
+
+
+def test_both_estimators_get_the_calibrated_inputs():
+    from psgsl_pgm.experiment._step import make_estimator
+    from psgsl_pgm.olfaction import PlumeModel
+
+    cfg = ExperimentConfig(pmfs_tempering=0.37, tempering=0.29)
+    model = PlumeModel(np.zeros((6, 8), bool), resolution=0.25, diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
+                       encounter_scale=cfg.encounter_scale)
+    assert make_estimator("pmfs", model, cfg).tempering == 0.37
+    assert make_estimator("infotaxis", model, cfg).tempering == 0.29
+    world = make_world(seed=6, source="oven", warm_up=5.0)
+    for name in ("infotaxis", "pmfs"):
+        b = VariantPosteriors(world, name, cfg)
+        assert (b.model.diffusivity, b.model.lifetime, b.model.encounter_scale) == (
+            cfg.diffusivity, cfg.lifetime, cfg.encounter_scale)
+        assert not b.model.wind.any()  # still air until the first anemometer reading
