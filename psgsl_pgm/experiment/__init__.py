@@ -13,7 +13,7 @@ the closed loop's, :mod:`psgsl_pgm.search`); :func:`run_experiment` a grid of so
 resumable); :func:`run_demo` the command ``psgsl demo``.
 """
 
-from ._calibration import CALIBRATION_RUNS, Calibration, calibrate, calibration_runs
+from ._calibration import CALIBRATION_RUNS, Calibration, calibrate, calibrate_encounter_scale, calibration_runs
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
@@ -38,6 +38,7 @@ __all__ = [
     "VARIANTS",
     "VariantPosteriors",
     "calibrate",
+    "calibrate_encounter_scale",
     "calibration_runs",
     "check_sources",
     "error_and_spread",

@@ -25,14 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..olfaction import (CalibrationRun, MeanWindEstimator, PlumeFit, PlumeModel, PMFSEstimator, ar1_tempering,
-                         fit_plume_parameters, hit_residuals, score_tempering)
+                         fit_plume_parameters, hit_residuals, profile_log_likelihood, score_tempering)
 from ..sim import make_world
 from ._config import ExperimentConfig, parse_source
 from ._robot_models import wind_basis
 from ._run import walk
 from ._tour import exploration_tour
 
-__all__ = ["CALIBRATION_RUNS", "Calibration", "calibrate", "calibration_runs", "pmfs_tempering"]
+__all__ = ["CALIBRATION_RUNS", "Calibration", "calibrate", "calibrate_encounter_scale", "calibration_runs",
+           "pmfs_tempering"]
 
 #: (seed, source) of the calibration runs: seeds and sources disjoint from the evaluation's (oven, bed, the floor
 #: point 5.0,6.0; seeds 0–999); two floor points in the bedrooms, where the dead-end rooms are.
@@ -99,6 +100,31 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)))
 
 
+def _fitted_model(run: CalibrationRun, diffusivity: float, lifetime: float, encounter_scale: float) -> PlumeModel:
+    """The run's plume (its estimated wind) with the given (D, τ, κ)."""
+    m = run.model
+    return PlumeModel(m.geometry.occupancy, resolution=m.geometry.resolution, origin=m.geometry.origin, wind=m.wind,
+                      outlets=m.outlets, diffusivity=diffusivity, lifetime=lifetime, encounter_scale=encounter_scale)
+
+
+def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> float:
+    """Maximum-likelihood κ alone, at the D and τ of ``config``, pooled over calibration runs.
+
+    With c_k = G(x_k | s_true) from each run's plume (its wind estimated from its own anemometer readings), κ
+    maximises Π_k P(g_k | κ c_k), P(hit) = ε + (1 − ε)(1 − exp(−κ c)) (:func:`psgsl_pgm.olfaction.
+    profile_log_likelihood`). :func:`calibrate` fits (D, τ, κ) jointly; this is its profile in κ at fixed (D, τ).
+
+    Returns
+    -------
+    kappa : float
+        m²/s.
+    """
+    config = ExperimentConfig() if config is None else config
+    data = calibration_runs(runs, config=config)
+    kappa, _ = profile_log_likelihood(data, config.diffusivity, config.lifetime, false_hit_rate=config.false_hit_rate)
+    return kappa
+
+
 def pmfs_tempering(data, fit: PlumeFit) -> float:
     """The PMFS score exponent λ (:class:`psgsl_pgm.olfaction.PMFSEstimator` ``tempering``) that maximises the
     log posterior of the known source at ¼, ½, ¾ and the end of every calibration run
@@ -106,10 +132,7 @@ def pmfs_tempering(data, fit: PlumeFit) -> float:
     wind, a uniform prior over the free cells."""
     scores, priors, truth = [], [], []
     for run in data:
-        m = run.model
-        model = PlumeModel(m.geometry.occupancy, resolution=m.geometry.resolution, origin=m.geometry.origin,
-                           wind=m.wind, outlets=m.outlets, diffusivity=fit.diffusivity, lifetime=fit.lifetime,
-                           encounter_scale=fit.encounter_scale)
+        model = _fitted_model(run, fit.diffusivity, fit.lifetime, fit.encounter_scale)
         est = PMFSEstimator.from_model(model)
         r, c = model.cell_of(run.source)
         n = len(run.hits)

@@ -167,3 +167,18 @@ def test_stored_plume_parameters_and_tempering_are_the_calibrated_ones():
     assert cfg.encounter_scale == pytest.approx(cal.plume.encounter_scale, rel=5e-3)
     assert cfg.tempering == pytest.approx(cal.tempering, rel=5e-3)
     assert cfg.pmfs_tempering == pytest.approx(cal.pmfs_tempering, rel=5e-3)
+
+
+@pytest.mark.slow
+def test_calibrate_encounter_scale_is_the_likelihood_maximiser_at_the_configs_plume():
+    from psgsl_pgm.experiment import ExperimentConfig, calibrate_encounter_scale, calibration_runs
+    from psgsl_pgm.olfaction import hit_log_likelihood
+
+    config = ExperimentConfig(stops=40)
+    runs = [(1000, "toilet")]
+    kappa = calibrate_encounter_scale(runs, config=config)
+    (data,) = calibration_runs(runs, config=config)
+    c = data.predicted(config.diffusivity, config.lifetime)
+    best = hit_log_likelihood(c, data.hits, kappa, config.false_hit_rate)
+    for k in (kappa * 0.99, kappa * 1.01):  # a maximum, not any root of something else
+        assert hit_log_likelihood(c, data.hits, k, config.false_hit_rate) < best
