@@ -25,6 +25,7 @@ from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
 from ._metrics import credible_region
+from ._detection import DetectionModel
 from ._policies import POLICIES, Situation, check_score, choose
 from ._space import FreeSpace
 
@@ -56,6 +57,12 @@ class SearchConfig:
     score : {"per-time", "gain"}
         How ``infotaxis`` and ``space-aware-infotaxis`` score a candidate pose: its gain per second of driving,
         turning and sensing (the default), or its gain alone (:mod:`psgsl_pgm.search._policies`).
+    far_spacing : float or None
+        m, lattice spacing of the candidate positions beyond ``horizon``, over the whole reachable free space
+        (:mod:`psgsl_pgm.search._policies`); None: no candidates beyond the horizon.
+    miss_probability : float
+        In [0, 1): probability that a move within ``found_radius`` of the source's found region does not find
+        it (:class:`DetectionModel`); 0 is the deterministic rule.
     """
 
     found_radius: float = 0.5
@@ -67,6 +74,8 @@ class SearchConfig:
     start: tuple = (0.8, 6.0)
     credible: float = 0.9
     score: str = "per-time"
+    far_spacing: float | None = 1.0
+    miss_probability: float = 0.0
 
     def __post_init__(self):
         for f in fields(self):
@@ -79,6 +88,10 @@ class SearchConfig:
                 v = index(v, "n_headings", minimum=1)
             elif f.name == "credible":
                 v = unit_interval(v, "credible", low_open=True, high_open=True)
+            elif f.name == "miss_probability":
+                v = unit_interval(v, "miss_probability", high_open=True)
+            elif f.name == "far_spacing" and v is None:
+                pass
             else:
                 v = positive(v, f.name, "metres" if f.name != "time_budget" else "seconds")
             object.__setattr__(self, f.name, v)
@@ -165,13 +178,6 @@ class SearchRun:
         return float(self.driven / self.geodesic) if self.geodesic > 0 else float("nan")
 
 
-def _target_points(world, house) -> np.ndarray:
-    if world.source_object is not None:
-        cells = np.argwhere(world.source_object.mask(house.grid))
-        return house.grid.cell_to_world(cells)
-    return world.source[None, :]
-
-
 def _tour_plan(tour):
     """Tour stops back and forth for ever: yields (stop, headings)."""
     order = list(range(len(tour)))
@@ -238,14 +244,15 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     plan = _tour_plan(tour) if policy == "tour" else None
     centres = house.grid.cell_centres()
     truth = world.source
-    target = _target_points(world, house)
     r = search.found_radius
     sense_time = world.gas_sensor.window
     budget = search.time_budget
+    detection = DetectionModel.from_house(house, r, miss_probability=search.miss_probability)
+    truth_hypothesis = detection.source_cell(truth, world.source_object, house)
+    misses = np.random.default_rng([int(seed), 0x5EA2C4]) if search.miss_probability > 0 else None
 
-    def near(points) -> np.ndarray:
-        d2 = ((np.asarray(points)[:, None, :] - target[None, :, :]) ** 2).sum(axis=-1)
-        return d2.min(axis=1) <= r * r
+    def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
+        return detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), truth_hypothesis)
 
     # geodesic distance from the start to where the source counts as found
     start_cell = space.snap(start_xy)
@@ -279,7 +286,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     start = space.position(start_cell)
     path_pts = [start]
     length = 0.0
-    found, t_found = bool(near(start[None])[0]), 0.0
+    found, t_found = False, 0.0  # a start within reach is found at t = 0 by the first stop's check
     post = record(start, tour.headings[0][-1], False, 0.0)
     headings = tuple(float(h) for h in tour.headings[0])
     cell, heading = start_cell, headings[-1]
@@ -299,7 +306,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             turn = 0.0  # the tour turns between its own headings (visit), as in the experiment
         else:
             sit = Situation(post, beliefs, variant, space, cell, heading, config.speed, config.turn_time,
-                            sense_time, search.horizon, r, cache, search.score)
+                            sense_time, search.horizon, r, cache, search.score, detection, search.far_spacing)
             dec = choose(policy, sit)
             cells = dec.path
             seg = space.position(cells)
@@ -308,7 +315,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             cell = dec.cell
         # found on the way?
         hits_on_path = near(seg)
-        if hits_on_path.any():
+        if hits_on_path.any() and (misses is None or misses.random() >= search.miss_probability):
             k = int(np.argmax(hits_on_path))
             arc = float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0
             t = world.time - t0 + arc / config.speed
@@ -320,6 +327,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                 break
         reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn,
                                       camera=not beliefs.mapped)
+        beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
         beliefs.observe(stop, reading, wind, frames)
         length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
         path_pts.extend(seg[1:])

@@ -44,6 +44,7 @@ import numpy as np
 from scipy.special import entr
 
 from .._infogain import semantic_information_gain
+from ._detection import DetectionModel
 
 __all__ = ["Decision", "POLICIES", "SCORES", "Situation", "check_score", "choose", "olfactory_gain", "score_per_time",
            "travel_time"]
@@ -78,6 +79,11 @@ class Situation:
         map and the estimator only); one dict per run, empty at the start.
     score : {"per-time", "gain"}
         How ``infotaxis`` and ``space-aware-infotaxis`` score a pose (:data:`SCORES`).
+    detection : DetectionModel, optional
+        The detection model of P_f (:mod:`psgsl_pgm.search._detection`); default: discs of ``found_radius``
+        (no footprints, a detector that never misses).
+    far_spacing : float, optional
+        Lattice spacing (m) of the candidates beyond ``horizon`` over the whole free space; None: none.
     """
 
     posterior: np.ndarray
@@ -93,6 +99,8 @@ class Situation:
     found_radius: float
     cache: dict = field(default_factory=dict)
     score: str = "per-time"
+    detection: object = None
+    far_spacing: float | None = None
 
 
 @dataclass(frozen=True)
@@ -141,30 +149,44 @@ def _score(sit: Situation, gain, tau) -> np.ndarray:
     return np.asarray(gain, dtype=np.float64)  # "gain"
 
 
-def _candidates(sit: Situation):
-    cells, drive, pred = sit.space.candidates(sit.cell, sit.horizon)
+def _candidates(sit: Situation, *, far: bool = True):
+    cells, drive, pred = sit.space.candidates(sit.cell, sit.horizon, sit.far_spacing if far else None)
     turn = _wrap(sit.space.headings[None, :] - sit.heading)  # (1, n_h)
     tau = travel_time(drive[:, None], turn, speed=sit.speed, turn_time=sit.turn_time, sense_time=sit.sense_time)
     return cells, drive, pred, tau
 
 
+def _detection(sit: Situation) -> DetectionModel:
+    """The situation's detection model (a disc model of ``found_radius`` when none is given, kept in the cache)."""
+    if sit.detection is not None:
+        return sit.detection
+    model = sit.cache.get("detection")
+    if model is None or model.found_radius != sit.found_radius:
+        model = sit.cache["detection"] = DetectionModel(sit.space.grid, sit.found_radius)
+    return model
+
+
 def _found_mass(sit: Situation, cells):
-    """P_f: posterior mass within found_radius of each candidate cell, (K,), and those cells (list of flat arrays)."""
-    post = sit.posterior.ravel()
-    discs = [sit.space.disc(c, sit.found_radius) for c in np.asarray(cells).tolist()]  # loop over candidates
-    return np.array([post[d].sum() for d in discs]), discs
+    """P_f of each candidate cell, (K,), and the hypotheses it finds (list of flat arrays), by the detection
+    model (:meth:`DetectionModel.found_probability`)."""
+    model = _detection(sit)
+    rows = model.cell_rows(cells, sit.space.position(cells))
+    return model.found_probability(sit.posterior, rows), rows
 
 
-def _hit_rows(sit: Situation, cells):
-    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b, cached per cell for the run."""
+def _hit_rows(sit: Situation, cells, *, entropies: bool = False):
+    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b (and, with ``entropies``, entr(P) alone), cached
+    per cell for the run."""
     cells = np.asarray(cells).tolist()
     missing = [c for c in cells if c not in sit.cache]
     if missing:
         p = sit.beliefs.estimator.hit_probability(sit.space.position(missing)).reshape(len(missing), -1)
         for c, row in zip(missing, p):
-            sit.cache[c] = (row, entr(row) + entr(1.0 - row))
+            e1 = entr(row)
+            sit.cache[c] = (row, e1 + entr(1.0 - row), e1)
     rows = [sit.cache[c] for c in cells]
-    return np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows])
+    out = (np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows]))
+    return out + (np.stack([r[2] for r in rows]),) if entropies else out
 
 
 def olfactory_gain(sit: Situation, cells) -> np.ndarray:
@@ -205,7 +227,14 @@ def infotaxis_gain(sit: Situation, cells):
 
 
 def space_aware_gain(sit: Situation, cells):
-    """G(p) of space-aware infotaxis, (K, n_headings), bits of log₂(remaining search)."""
+    """G(p) of space-aware infotaxis, (K, n_headings), bits of log₂(remaining search).
+
+    With u = p ∘ w_p the posterior times the likelihood w_p of "not found at p" (the detection model) and ℓ the
+    likelihood of a gas outcome, the outcome's unnormalised posterior is u ℓ, Z = ℓ·u, and its entropy and
+    expected distance are H = log Z + [ℓ·entr(u) + u·entr(ℓ)]/Z and D = (ℓ ∘ d_p)·u / Z (entr(x) = −x log x);
+    entr(u) = w entr(p) + p entr(w). Every term is a product of a static row (ℓ, entr(ℓ), d_p, cached per cell)
+    with p or entr(p), corrected on the few hypotheses that p finds: no (K, H·W) logarithm per decision.
+    """
     space = sit.space
     post = sit.posterior.ravel()
     ell = 2.0 * sit.found_radius
@@ -219,32 +248,55 @@ def space_aware_gain(sit: Situation, cells):
     dist_now = space.distances(sit.cell)
     ok = np.isfinite(dist_now)
     v_now = value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
-    p_f, discs = _found_mass(sit, cells)
-    q = np.repeat(post[None, :], len(cells), axis=0)
-    for k, d in enumerate(discs):  # loop over candidates: not found within the radius of the candidate
-        q[k, d] = 0.0
-    q /= np.where(1 - p_f > 0, 1 - p_f, 1.0)[:, None]
-    lik, _ = _hit_rows(sit, cells)  # (K, n)
+    p_f, rows = _found_mass(sit, cells)
+    a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
+    e_w = float(entr(1.0 - a))  # entr(w) on those hypotheses (0 for a detector that never misses)
+    lik, h_bin, e_hit = _hit_rows(sit, cells, entropies=True)  # (K, n): ℓ_hit, entr(ℓ)+entr(1−ℓ), entr(ℓ_hit)
     dist = np.stack([space.distances(c) for c in np.asarray(cells).tolist()])  # (K, n), cached per cell
     dist = np.where(np.isfinite(dist), dist, 0.0)  # unreachable cells carry no mass
+    e = entr(post)
+    k_n = len(cells)
+    rid = np.repeat(np.arange(k_n), [len(r) for r in rows])
+    idx = np.concatenate(rows) if rows else np.empty(0, np.int64)
+
+    def corr(x):  # Σ over each candidate's found hypotheses of the values x at (rid, idx)
+        return np.bincount(rid, x, minlength=k_n)
+
+    l_m, d_m, p_m, e_m = lik[rid, idx], dist[rid, idx], post[idx], e[idx]
+
+    def times_u(dense_p, corr_p):  # X·u = X·p − a Σ_found X p
+        return dense_p - a * corr_p
+
+    mass = times_u(post.sum(), corr(p_m))  # Σ u = 1 − P_f
+    ent_u = times_u(e.sum(), corr(e_m)) + e_w * corr(p_m)  # Σ entr(u)
+    z_hit = times_u(lik @ post, corr(l_m * p_m))
+    l_ent_u = times_u(lik @ e, corr(l_m * e_m)) + e_w * corr(l_m * p_m)  # ℓ_hit · entr(u)
+    u_e_hit = times_u(e_hit @ post, corr(e_hit[rid, idx] * p_m))  # u · entr(ℓ_hit)
+    u_e_bin = times_u(h_bin @ post, corr(h_bin[rid, idx] * p_m))  # u · (entr(ℓ_hit) + entr(ℓ_miss))
+    d_hit = times_u((lik * dist) @ post, corr(l_m * d_m * p_m))
+    d_all = times_u(dist @ post, corr(d_m * p_m))
+    outcomes = ((z_hit, l_ent_u + u_e_hit, d_hit),  # hit
+                (mass - z_hit, (ent_u - l_ent_u) + (u_e_bin - u_e_hit), d_all - d_hit))  # miss
     phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)
-    expected = np.zeros((len(cells), len(space.headings)))
-    for like in (lik, 1.0 - lik):  # the two gas outcomes: hit, miss
-        joint = q * like
-        z = joint.sum(axis=1)  # P(h | p, not found)
-        post_h = joint / np.where(z > 0, z, 1.0)[:, None]
-        h_bits = entr(post_h).sum(axis=1) / np.log(2)
-        d_h = (post_h * dist).sum(axis=1)
-        expected += z[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
+    expected = np.zeros((k_n, len(space.headings)))
+    norm = np.where(mass > 0, mass, 1.0)
+    for z, t, d in outcomes:
+        pos = z > 0
+        zz = np.where(pos, z, 1.0)
+        h_bits = np.where(pos, np.log(zz) + t / zz, 0.0) / np.log(2)
+        d_h = np.where(pos, d / zz, 0.0)
+        expected += (np.where(pos, z, 0.0) / norm)[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
     return v_now - (1.0 - p_f[:, None]) * expected
 
 
 def choose(policy: str, sit: Situation) -> Decision:
     """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
     if policy == "greedy":
-        cells, drive, pred, tau = _candidates(sit)
+        cells, drive, pred, tau = _candidates(sit, far=False)  # towards the MAP, re-planned within the horizon
         target = int(np.argmax(sit.posterior))  # the MAP cell
-        d_target = np.array([sit.space.distances(c)[target] for c in cells.tolist()])
+        # geodesic distance from each candidate to the MAP cell (symmetric graph: one Dijkstra from the MAP's
+        # nearest drivable cell, then straight to the MAP cell, as FreeSpace.distances)
+        d_target = sit.space.distances(sit.space.snap(sit.space.position(target)))[cells] + sit.space.offset(target)
         rank = np.lexsort((tau.min(axis=1), d_target))  # nearest to the MAP cell, then quickest
         k = int(rank[0])
         to = sit.space.position(target) - sit.space.position(cells[k])
