@@ -134,8 +134,9 @@ class DetectionModel:
             return (_d2(p[:, None, :], fp[None, :, :]) <= self.found_radius**2).any(axis=1)
         return _d2(p, self.centres[c][None, :]) <= self.found_radius**2
 
-    def rows(self, points) -> sp.csr_matrix:
-        """(p, H·W) bool sparse: row k marks every hypothesis c that a robot at point k finds."""
+    def _pairs(self, points):
+        """(point index, hypothesis) pairs of every hypothesis found from each point, sorted by point (no
+        duplicates: the disc part covers cells no object owns, and objects own disjoint cells)."""
         p = self._points(points)
         h, w = self.shape
         rc = self.grid.world_to_cell(p)  # (p, 2)
@@ -144,21 +145,32 @@ class DetectionModel:
         flat = np.where(inside, cand[..., 0] * w + cand[..., 1], 0)
         disc = inside & (self.owner[flat] < 0) & (_d2(p[:, None, :], self.centres[flat]) <= self.found_radius**2)
         k, o = np.nonzero(disc)
-        point_part = sp.csr_matrix((np.ones(k.size), (k, flat[k, o])), shape=(len(p), h * w))
-        object_part = sp.csr_matrix(self.near_footprints(p).astype(np.float64)) @ self._owned
-        return (point_part + object_part).astype(bool).tocsr()
+        ks, cs = [k], [flat[k, o]]
+        if len(self._sizes):
+            kj, jj = np.nonzero(self.near_footprints(p))
+            if kj.size:
+                owned = self._owned[jj]  # (pairs, n) rows of the owned cells
+                ks.append(np.repeat(kj, np.diff(owned.indptr)))
+                cs.append(owned.indices.astype(np.int64))
+        k, c = np.concatenate(ks), np.concatenate(cs)
+        order = np.lexsort((c, k))
+        return k[order], c[order], len(p)
+
+    def rows(self, points) -> sp.csr_matrix:
+        """(p, H·W) bool sparse: row k marks every hypothesis c that a robot at point k finds."""
+        k, c, n_p = self._pairs(points)
+        return sp.csr_matrix((np.ones(k.size, dtype=bool), (k, c)), shape=(n_p, self.centres.shape[0]))
 
     def cell_rows(self, cells, positions) -> list:
-        """Per cell: the flat hypotheses found from its ``positions`` row (cached by cell; candidates of the
-        policies are cell centres)."""
+        """Per cell: the sorted flat hypotheses found from its ``positions`` row (cached by cell; the policies'
+        candidates are cell centres)."""
         cells = [int(c) for c in np.asarray(cells).ravel()]
         missing = [k for k, c in enumerate(cells) if c not in self._rows_cache]
         if missing:
-            m = self.rows(np.asarray(positions, dtype=np.float64).reshape(-1, 2)[missing])
-            for k, row in zip(missing, np.split(m.indices, m.indptr[1:-1])):
-                row = np.sort(row)
+            k, c, n_p = self._pairs(np.asarray(positions, dtype=np.float64).reshape(-1, 2)[missing])
+            for i, row in enumerate(np.split(c, np.searchsorted(k, np.arange(1, n_p)))):
                 row.flags.writeable = False
-                self._rows_cache[cells[k]] = row
+                self._rows_cache[cells[missing[i]]] = row
         return [self._rows_cache[c] for c in cells]
 
     # --- what it says about the source ------------------------------------------------------------------------
@@ -180,13 +192,17 @@ class DetectionModel:
             raise ValueError(f"the source object {source_object.name!r} is covered by later objects everywhere")
         return int(mine[0])
 
+    def not_found_likelihood(self, points) -> np.ndarray:
+        """(H·W,) P(not found along ``points`` | s = c): m on every hypothesis found from some point, 1 elsewhere
+        (one detection trial for the whole path)."""
+        out = np.ones(self.centres.shape[0])
+        out[self._pairs(points)[1]] = self.miss_probability
+        return out
+
     def not_found_log_likelihood(self, points) -> np.ndarray:
-        """(H·W,) log P(not found along ``points`` | s = c): log m on every hypothesis found from some point
-        (−inf for m = 0), 0 elsewhere (one detection trial for the whole path)."""
-        hit = np.zeros(self.centres.shape[0], dtype=bool)
-        hit[self.rows(points).indices] = True
+        """(H·W,) log of :meth:`not_found_likelihood` (−inf where a detector that never misses rules c out)."""
         with np.errstate(divide="ignore"):
-            return np.where(hit, np.log(self.miss_probability), 0.0)
+            return np.log(self.not_found_likelihood(points))
 
     def found_probability(self, posterior, rows) -> np.ndarray:
         """(K,) P_f = (1 − m) Σ_{c ∈ row} p(c) for each row of hypotheses (from :meth:`cell_rows`)."""
