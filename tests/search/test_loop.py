@@ -140,3 +140,17 @@ def test_the_default_score_is_left_out_of_stored_settings_so_older_runs_still_re
     stored = SearchConfig(score="gain").to_dict()
     assert stored["score"] == "gain" and SearchConfig(**stored) == SearchConfig(score="gain")
     assert SearchConfig(**SearchConfig().to_dict()) == SearchConfig()
+
+
+def test_new_search_options_are_validated_and_stored():
+    assert SearchConfig(far_spacing=None).far_spacing is None
+    with pytest.raises(ValueError, match="far_spacing must be a positive"):
+        SearchConfig(far_spacing=0)
+    with pytest.raises(TypeError, match="far_spacing"):
+        SearchConfig(far_spacing="far")
+    with pytest.raises(ValueError, match=r"miss_probability must lie in \[0, 1\)"):
+        SearchConfig(miss_probability=1.0)
+    with pytest.raises(TypeError, match="miss_probability"):
+        SearchConfig(miss_probability=None)
+    d = SearchConfig(miss_probability=0.1, far_spacing=None).to_dict()
+    assert d["miss_probability"] == 0.1 and d["far_spacing"] is None
