@@ -174,28 +174,39 @@ def _found_mass(sit: Situation, cells):
     return model.found_probability(sit.posterior, rows), rows
 
 
-def _hit_rows(sit: Situation, cells, *, entropies: bool = False):
-    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b (and, with ``entropies``, entr(P) alone), cached
-    per cell for the run."""
+def _hit_blocks(sit: Situation, cells) -> list:
+    """Per candidate cell, the (3, H·W) static rows [P(hit at the cell | s), H_b = entr(P) + entr(1 − P),
+    entr(P)], cached per cell for the run (they depend on the map and the estimator only)."""
     cells = np.asarray(cells).tolist()
     missing = [c for c in cells if c not in sit.cache]
     if missing:
         p = sit.beliefs.estimator.hit_probability(sit.space.position(missing)).reshape(len(missing), -1)
         for c, row in zip(missing, p):
             e1 = entr(row)
-            sit.cache[c] = (row, e1 + entr(1.0 - row), e1)
-    rows = [sit.cache[c] for c in cells]
-    out = (np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows]))
-    return out + (np.stack([r[2] for r in rows]),) if entropies else out
+            block = np.stack([row, e1 + entr(1.0 - row), e1])
+            block.flags.writeable = False
+            sit.cache[c] = block
+    return [sit.cache[c] for c in cells]
+
+
+def _finite_distances(sit: Situation, cell: int) -> np.ndarray:
+    """(H·W,) geodesic distances from ``cell``, 0 where unreachable (no mass there), cached for the run."""
+    key = ("distance", int(cell))
+    d = sit.cache.get(key)
+    if d is None:
+        d = sit.space.distances(cell)
+        d = sit.cache[key] = np.where(np.isfinite(d), d, 0.0)
+    return d
 
 
 def olfactory_gain(sit: Situation, cells) -> np.ndarray:
     """φ_G = I(S; hit at p) = H_b(Σ_s p(s) P_p(s)) − Σ_s p(s) H_b(P_p(s)) under the variant's posterior, (K,) nats
     (:meth:`OlfactoryEstimator.information_gain` with ``posterior=``, with the static rows cached)."""
-    p_hit, h_bin = _hit_rows(sit, cells)
     post = sit.posterior.ravel()
-    p_bar = p_hit @ post
-    return np.maximum(entr(p_bar) + entr(1.0 - p_bar) - h_bin @ post, 0.0)
+    # one (2, H·W) product per candidate, on its cached rows in place (no (K, H·W) copy)
+    dots = np.array([b[:2] @ post for b in _hit_blocks(sit, cells)]).reshape(-1, 2)
+    p_bar = dots[:, 0]
+    return np.maximum(entr(p_bar) + entr(1.0 - p_bar) - dots[:, 1], 0.0)
 
 
 def _view_information(sit: Situation, cells) -> np.ndarray:
@@ -251,30 +262,31 @@ def space_aware_gain(sit: Situation, cells):
     p_f, rows = _found_mass(sit, cells)
     a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
     e_w = float(entr(1.0 - a))  # entr(w) on those hypotheses (0 for a detector that never misses)
-    lik, h_bin, e_hit = _hit_rows(sit, cells, entropies=True)  # (K, n): ℓ_hit, entr(ℓ)+entr(1−ℓ), entr(ℓ_hit)
-    dist = np.stack([space.distances(c) for c in np.asarray(cells).tolist()])  # (K, n), cached per cell
-    dist = np.where(np.isfinite(dist), dist, 0.0)  # unreachable cells carry no mass
     e = entr(post)
     k_n = len(cells)
-    rid = np.repeat(np.arange(k_n), [len(r) for r in rows])
-    idx = np.concatenate(rows) if rows else np.empty(0, np.int64)
+    pe = np.stack([post, e], axis=1)  # (n, 2)
+    dense = np.empty((k_n, 6))  # per candidate: L·p, L·e, H_b·p, entr(L)·p, (L∘d)·p, d·p  (L = P(hit), e = entr(p))
+    corr = np.empty((k_n, 8))  # the same six over the hypotheses the candidate finds, then Σp and Σe there
+    for k, (block, row, c) in enumerate(zip(_hit_blocks(sit, cells), rows, np.asarray(cells).tolist())):
+        d = _finite_distances(sit, c)  # loop over candidates (tens): products on cached rows, no copies
+        lpe = block[0] @ pe
+        ld = block[0] * d
+        dense[k] = (lpe[0], lpe[1], block[1] @ post, block[2] @ post, ld @ post, d @ post)
+        b_m, p_m, e_m = block[:, row], post[row], e[row]
+        corr[k] = (b_m[0] @ p_m, b_m[0] @ e_m, b_m[1] @ p_m, b_m[2] @ p_m, ld[row] @ p_m, d[row] @ p_m,
+                   p_m.sum(), e_m.sum())
 
-    def corr(x):  # Σ over each candidate's found hypotheses of the values x at (rid, idx)
-        return np.bincount(rid, x, minlength=k_n)
+    def times_u(j):  # X·u = X·p − a Σ_found X p  (u = p ∘ w)
+        return dense[:, j] - a * corr[:, j]
 
-    l_m, d_m, p_m, e_m = lik[rid, idx], dist[rid, idx], post[idx], e[idx]
-
-    def times_u(dense_p, corr_p):  # X·u = X·p − a Σ_found X p
-        return dense_p - a * corr_p
-
-    mass = times_u(post.sum(), corr(p_m))  # Σ u = 1 − P_f
-    ent_u = times_u(e.sum(), corr(e_m)) + e_w * corr(p_m)  # Σ entr(u)
-    z_hit = times_u(lik @ post, corr(l_m * p_m))
-    l_ent_u = times_u(lik @ e, corr(l_m * e_m)) + e_w * corr(l_m * p_m)  # ℓ_hit · entr(u)
-    u_e_hit = times_u(e_hit @ post, corr(e_hit[rid, idx] * p_m))  # u · entr(ℓ_hit)
-    u_e_bin = times_u(h_bin @ post, corr(h_bin[rid, idx] * p_m))  # u · (entr(ℓ_hit) + entr(ℓ_miss))
-    d_hit = times_u((lik * dist) @ post, corr(l_m * d_m * p_m))
-    d_all = times_u(dist @ post, corr(d_m * p_m))
+    mass = post.sum() - a * corr[:, 6]  # Σ u = 1 − P_f
+    ent_u = (e.sum() - a * corr[:, 7]) + e_w * corr[:, 6]  # Σ entr(u)
+    z_hit = times_u(0)
+    l_ent_u = times_u(1) + e_w * corr[:, 0]  # ℓ_hit · entr(u)
+    u_e_bin = times_u(2)  # u · (entr(ℓ_hit) + entr(ℓ_miss))
+    u_e_hit = times_u(3)  # u · entr(ℓ_hit)
+    d_hit = times_u(4)
+    d_all = times_u(5)
     outcomes = ((z_hit, l_ent_u + u_e_hit, d_hit),  # hit
                 (mass - z_hit, (ent_u - l_ent_u) + (u_e_bin - u_e_hit), d_all - d_hit))  # miss
     phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)
