@@ -1,16 +1,34 @@
-"""The closed loop in the simulated house: the policy chooses each stop from the beliefs it has built so far.
+r"""The closed loop in the simulated house: the policy chooses each stop from the beliefs it has built so far.
 
 Per stop (the validation experiment's own per-step code, :class:`psgsl_pgm.experiment.VariantPosteriors` and
 :func:`psgsl_pgm.experiment.visit`):
 
-    drive along the geodesic path (the gas keeps evolving)  ->  turn the camera  ->  one gas reading, one wind
-    reading, one camera frame  ->  p(s | g) and both class-belief maps updated  ->  the variant's posterior
-    ->  the policy picks the next pose
+    drive along the geodesic path (the gas keeps evolving)  ->  found on the way?  ->  "not found" update
+    ->  turn the camera  ->  one gas reading, one wind reading, one camera frame  ->  p(s | g) and both
+    class-belief maps updated  ->  the variant's posterior  ->  the policy picks the next pose
 
 Every policy starts with the tour's first stop (a look-around at the start). The search ends when the robot
-comes within ``found_radius`` of the true source — of the emitting object's footprint when the source is an
-object (a robot cannot drive into an oven; its nearest drivable cell is 0.55 m from the oven's centre) — at
-any point of its path (found), or at ``time_budget`` s of simulated time.
+finds the source at any point of its path (found), or at ``time_budget`` s of simulated time; a find at
+t ≤ ``time_budget`` counts.
+
+**Found, and "not found here".** One detection model (:class:`psgsl_pgm.search.DetectionModel`) decides both.
+Under the hypothesis s = c the robot at x finds the source iff x lies within r = ``found_radius`` of c's found
+region R(c): the footprint of the object that owns c in the robot's map (an oven: a robot cannot drive into
+it, and its nearest drivable cell is 0.55 m from its centre), or c's own centre otherwise (a disc of radius r).
+The success rule is that rule with the true source as hypothesis (the emitting object, or the cell holding a
+point source). A move along path points x_1 … x_p (the drive and the stop) that does not find the source is an
+observation F̄ with
+
+.. math:: P(\bar F \mid s = c) = \begin{cases} m & \exists k:\ d(x_k, R(c)) \le r \\
+                                              1 & \text{otherwise} \end{cases}
+
+(m = ``miss_probability``, 0 by default: the visited hypotheses are ruled out), applied to p(s | g) after every
+move (:meth:`VariantPosteriors.condition`, :meth:`OlfactoryEstimator.condition`): p(s | g, F̄) ∝ p(s | g)
+P(F̄ | s). Since P(F̄ | s) depends on s only, every variant's fused posterior p(s | g, z, F̄) ∝ p(s | g, F̄)
+p(s | z) holds it exactly once. With m > 0 a move within reach of the true source finds it with probability
+1 − m (a draw from a generator seeded with the run's seed, used only then). The fixed tour of the validation
+experiment (``psgsl experiment``) does not apply this update: it measures estimation along a fixed path, where
+the robot is not searching.
 """
 
 from __future__ import annotations

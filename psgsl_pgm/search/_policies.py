@@ -3,8 +3,26 @@ r"""Policies of the closed loop in a house: given the beliefs and the robot's po
 Every policy sees a :class:`Situation` (the variant's posterior, the beliefs, the robot's cell and heading,
 the free space) and returns a :class:`Decision` (the next cell, the camera headings there, the path).
 
-**Scoring rule** (:data:`SCORES`). Candidate poses p = (cell, heading) are those of
-:meth:`FreeSpace.candidates`. Each costs the time
+**Candidates: every room.** Candidate poses p = (cell, heading) are those of :meth:`FreeSpace.candidates`:
+the cells of the ``spacing`` lattice within ``horizon`` (geodesic) of the robot, and — with ``far_spacing``
+(:class:`SearchConfig`, 1 m by default) — the cells of a coarser lattice over the whole reachable free space
+beyond it, each at its geodesic travel time. Why the whole free space and not frontiers, room targets or a
+tree search: after the "not found" update the posterior's mass sits where the robot has not been, often in
+another room (a bed in a dead-end bedroom), and only a candidate there has a P_f large enough to pay for the
+drive; a frontier is ill-defined here (the map is known; what is unexplored is the belief), room-level targets
+would need a second scoring rule for "a room", and a tree search over short moves multiplies the cost of a
+decision by the branching factor per level while still seeing only a few metres ahead. The 1-m far lattice
+matches the found diameter 2r (a candidate every found disc), keeps ≈ 100 candidates in the embedded house,
+and a decision is one pass of the same gains over them; the robot re-plans at every stop, so a far target is
+only a direction until it is within the horizon. ``greedy`` keeps the horizon's candidates (it drives towards
+the MAP cell and re-plans every ``horizon`` metres).
+
+**P_f** is the probability of finding the source at p under the detection model of the success rule
+(:class:`psgsl_pgm.search.DetectionModel`): P_f(p) = (1 − m) Σ_{c: d(p, R(c)) ≤ r} p(c), R(c) the found region of
+hypothesis c (an object's footprint or c itself), m the miss probability; the belief after "not found at p" is
+p(c) w_p(c) / (1 − P_f), w_p(c) = m on those hypotheses, 1 elsewhere — the update the loop then applies.
+
+**Scoring rule** (:data:`SCORES`). Each candidate pose costs the time
 
 .. math:: \tau(p) = d(p)/v + t_\text{turn}\,|\Delta\theta(p)|/(\pi/2) + t_\text{sense},
 
@@ -13,7 +31,7 @@ as on the tour), and the fixed time of one gas reading.
 
 * ``"per-time"`` (the default) — a policy's gain G(p) is divided by τ(p): score(p) = G(p)/τ(p) when
   G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it).
-* ``"gain"`` — score(p) = G(p): the most informative pose within the horizon, however long it takes to reach.
+* ``"gain"`` — score(p) = G(p): the most informative candidate pose, however long it takes to reach.
   Dividing by τ favours the short, cheap moves around the robot where every pose gains little; in the house
   that kept infotaxis out of the bedroom (README, "Closed-loop search").
 
@@ -21,7 +39,7 @@ The best score wins; ties go to the first candidate (lattice order) and the firs
 moves (:meth:`FreeSpace.candidates`).
 
 * ``infotaxis`` — the expected information of the next stop, Vergassola et al. (2007) with the probability
-  P_f(p) of finding the source there (the posterior mass within ``found_radius``):
+  P_f(p) of finding the source there:
   G(p) = P_f(p) H(S) + (1 − P_f(p)) [φ_G(p) + φ_O(p)], φ_G = I(S; hit at p) under the variant's posterior and
   φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
   Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
@@ -29,10 +47,12 @@ moves (:meth:`FreeSpace.candidates`).
   distance to the source and H the entropy in bits, estimates log₂ of the remaining search; in the house D is
   the expected geodesic distance in units of the found diameter ℓ = 2 ``found_radius`` and H is counted over
   cells of one found disc (H − log₂(π r²/Δx²), floored at 0), so that one "cell" is what one visit can rule
-  out. G(p) = V_now − (1 − P_f) Σ_h P(h | p) V_h(p) over the gas outcome h ∈ {miss, hit}; the semantic
-  extension subtracts the view's expected information φ_O(p)/ln 2 bits from H_h.
-* ``greedy`` — drive towards the most probable cell: the candidate nearest (geodesic) to the MAP cell, with
-  the camera towards it.
+  out. G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
+  those of p(s | h, F̄) ∝ p(s) w_p(s) P(h | s) (:func:`space_aware_gain` computes them from cached rows without
+  forming that belief); the semantic extension subtracts the view's expected information φ_O(p)/ln 2 bits from
+  H_h.
+* ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
+  the MAP cell, with the camera towards it.
 * ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
 """
 

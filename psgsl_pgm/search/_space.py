@@ -1,9 +1,9 @@
 """Where the robot can go and what it can see from there: the free-space graph, candidate poses, and cached
 per-position views and geodesic distances.
 
-Candidate poses of a decision (issue 15, item 1): the cells of a fixed lattice (spacing ``spacing``) that are
-navigable and within ``horizon`` metres of the robot *along the free-space graph*, plus the robot's own
-cell, each with ``n_headings`` camera headings.
+Candidate poses of a decision: the cells of a fixed lattice (spacing ``spacing``) that are navigable and within
+``horizon`` metres of the robot *along the free-space graph*, and optionally those of a coarser lattice
+(``far_spacing``) over the rest of the reachable free space, each with ``n_headings`` camera headings.
 
 Views: the camera sees F_p = field_of_view(p) ∩ free (what :meth:`psgsl_pgm.sim.Camera.visible` returns). The
 line of sight does not depend on the heading: it comes from the core's :class:`psgsl_pgm.ViewCache` of the
