@@ -115,8 +115,9 @@ class SearchConfig:
             object.__setattr__(self, f.name, v)
 
     def to_dict(self) -> dict:
-        """The settings as JSON types; the default ``score`` is left out, so that runs stored before the option
-        existed still match (and resume)."""
+        """The settings as JSON types. The default ``score`` is left out (as runs stored before the option
+        existed have it); ``far_spacing`` and ``miss_probability`` are always written, so that runs stored
+        before the "not found" update and the far candidates — other searches — never resume into a new grid."""
         d = asdict(self)
         d["start"] = list(self.start)
         if d["score"] == "per-time":

@@ -140,6 +140,9 @@ def test_the_default_score_is_left_out_of_stored_settings_so_older_runs_still_re
     stored = SearchConfig(score="gain").to_dict()
     assert stored["score"] == "gain" and SearchConfig(**stored) == SearchConfig(score="gain")
     assert SearchConfig(**SearchConfig().to_dict()) == SearchConfig()
+    # runs stored before the "not found" update and the far candidates searched differently: they never match
+    old = {k: v for k, v in SearchConfig().to_dict().items() if k not in ("far_spacing", "miss_probability")}
+    assert old != SearchConfig().to_dict()
 
 
 def test_new_search_options_are_validated_and_stored():
