@@ -178,15 +178,20 @@ class DetectionModel:
         """The hypothesis of the true source: a cell that ``source_object`` owns (its footprint is then the found
         region), or the cell holding ``source_xy`` for a point source.
 
-        ``source_object`` must be one of ``house.objects`` (by identity), the house whose footprints the model
-        holds; ValueError when later objects cover all of its cells.
+        ``source_object`` must be one of ``house.objects`` (the same object, or one with the same class, name
+        and footprint), the house whose footprints the model holds; ValueError otherwise, or when later objects
+        cover all of its cells.
         """
         if source_object is None:
             r, c = (int(v) for v in self.grid.world_to_cell(np.asarray(source_xy, dtype=np.float64)))
             return r * self.shape[1] + c
         j = next((i for i, o in enumerate(house.objects) if o is source_object), None)
+        if j is None:  # an equal object (same class, name and footprint), e.g. read again from a world file
+            j = next((i for i, o in enumerate(house.objects) if o.class_name == source_object.class_name
+                      and o.name == source_object.name and o.footprint.shape == source_object.footprint.shape
+                      and np.array_equal(o.footprint, source_object.footprint)), None)
         if j is None:
-            raise ValueError("source_object must be one of the house's objects")
+            raise ValueError(f"source_object must be one of the house's objects, got {source_object!r}")
         mine = np.flatnonzero(self.owner == j)
         if mine.size == 0:
             raise ValueError(f"the source object {source_object.name!r} is covered by later objects everywhere")

@@ -61,6 +61,13 @@ def test_an_object_source_is_found_near_its_footprint_not_only_near_its_centre(p
     house, space, _, oven = probe
     model = DetectionModel.from_house(house, 0.5)
     truth = model.source_cell(oven.center, oven, house)
+    from psgsl_pgm.sim import SceneObject
+
+    again = SceneObject(oven.class_name, oven.footprint.copy(), oven.z_range, oven.name)
+    assert model.source_cell(oven.center, again, house) == truth
+    moved = SceneObject(oven.class_name, oven.footprint + 0.3, oven.z_range, oven.name)
+    with pytest.raises(ValueError, match="source_object must be one of the house's objects"):
+        model.source_cell(oven.center, moved, house)
     fp = np.flatnonzero(oven.mask(house.grid).ravel() & house.grid.free.ravel())
     np.testing.assert_array_equal(np.sort(_brute_region(house, truth)), fp)
     nav = space.centres[space.nav.ravel()]
