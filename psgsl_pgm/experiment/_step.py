@@ -226,6 +226,12 @@ class VariantPosteriors:
             for m in self.maps.values():  # the same frames for both maps: one observation stream
                 m.observe(frame)
 
+    def condition(self, log_likelihood) -> None:
+        """Condition p(s | g) on an observation of s other than a gas reading (the closed loop's "not found
+        here", :class:`psgsl_pgm.search.DetectionModel`): every variant's p(s | g, z) ∝ p(s | g) p(s | z) then
+        holds its factor exactly once (the fixed tour of the validation experiment never calls this)."""
+        self.estimator.condition(log_likelihood)
+
     def semantic(self, variant: str) -> np.ndarray:
         """p(s | z) of a semantic variant, (H, W)."""
         return semantic_terms([self.maps[variant]], self.likelihood, self.class_prior)[0]

@@ -94,6 +94,7 @@ class OlfactoryEstimator(abc.ABC):
     def reset(self) -> None:
         """Forget all readings: the posterior returns to the prior."""
         self._observations: list[Observation] = []
+        self._log_other = None  # Σ of the log-likelihoods given to condition() (None: none given)
         self._reset_state()
         self._set_log_posterior(self._log_prior.copy())
 
@@ -144,6 +145,8 @@ class OlfactoryEstimator(abc.ABC):
             wind=as_wind_vector(wind),
         )
         log_target, payload = self._propose(obs)
+        if self._log_other is not None:
+            log_target = log_target + self._log_other
         finite = np.isfinite(log_target) & self.geometry.free.ravel()
         if np.isnan(log_target).any():
             raise FloatingPointError("internal error: NaN in the log posterior")  # never expected
@@ -161,8 +164,9 @@ class OlfactoryEstimator(abc.ABC):
         """Re-assimilate every reading so far under a new plume model of the same map (e.g. one solved with a
         refreshed wind estimate) and return the new posterior.
 
-        The prior (and anything folded into it) is kept; the subclass state is rebuilt by replaying the stored
-        observations in order, so the result equals a fresh estimator on ``model`` fed the same readings.
+        The prior and the factors given to :meth:`condition` are kept; the subclass state is rebuilt by replaying
+        the stored observations in order, so the result equals a fresh estimator on ``model`` fed the same
+        readings and conditioned on the same observations.
         Cost: one adjoint solve per distinct sensor cell visited, on ``model``'s (empty) cache.
         """
         if not isinstance(model, PlumeModel):
@@ -176,7 +180,43 @@ class OlfactoryEstimator(abc.ABC):
         for obs in self._observations:
             log_post, payload = self._propose(obs)
             self._accept(obs, payload)
+        if self._log_other is not None:  # p(s | g, F̄) ∝ p(s | g) P(F̄ | s): the "not found" factors stay
+            log_post = log_post + self._log_other
         self._set_log_posterior(log_post)
+        return self.posterior
+
+    def condition(self, log_likelihood) -> np.ndarray:
+        """Multiply p(s | g) by the likelihood of an observation other than a gas reading, and keep it.
+
+        The closed loop's "not found here" (:meth:`psgsl_pgm.search.DetectionModel.not_found_log_likelihood`):
+        p(s | g, F̄) ∝ p(s | g) P(F̄ | s). The factor stays in the posterior through later readings (it is
+        added to every later proposal) and is forgotten by :meth:`reset`. Since it depends on s only, fusing
+        the result with p(s | z) (eq. ``combined-conditionals``) gives every variant the update exactly once.
+
+        Parameters
+        ----------
+        log_likelihood : (H, W) or (H·W,) array_like of float
+            log P(observation | s = c) for every cell: finite or −inf (probability 0), never NaN or +inf.
+
+        Returns
+        -------
+        posterior : (H, W) ndarray of float64
+            The conditioned posterior (read-only view).
+        """
+        ll = as_float_array(log_likelihood, "log_likelihood", dtype=np.float64)
+        n = self.geometry.shape[0] * self.geometry.shape[1]
+        if ll.size != n or ll.shape not in (self.geometry.shape, (n,)):
+            raise ValueError(f"log_likelihood must have the map's shape {self.geometry.shape} (or ({n},)), "
+                             f"got {ll.shape}")
+        ll = ll.astype(np.float64).ravel()
+        if np.isnan(ll).any() or (ll == np.inf).any():
+            raise ValueError("log_likelihood must be finite or -inf (no NaN, no +inf)")
+        log_target = self._log_post + ll
+        if not np.isfinite(log_target[self.geometry.free.ravel()]).any():
+            raise ValueError("the observation has zero likelihood for every cell with positive probability; "
+                             "it was not applied")
+        self._log_other = ll.copy() if self._log_other is None else self._log_other + ll
+        self._set_log_posterior(log_target)
         return self.posterior
 
     # --- read-out -------------------------------------------------------------------------------------------

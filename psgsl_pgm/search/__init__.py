@@ -4,6 +4,7 @@ experiment's own per-step code, declarations with credible regions, and the open
 """
 
 from ._demo import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
+from ._detection import DetectionModel
 from ._figures import plot_paths, plot_survival
 from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._loop import SearchConfig, SearchRun, run_closed_loop
@@ -18,6 +19,7 @@ __all__ = [
     "DEMO_BUDGET",
     "DEMO_SEARCH_SEEDS",
     "Decision",
+    "DetectionModel",
     "FreeSpace",
     "OPEN_SPACE_POLICIES",
     "OpenSpaceSearch",

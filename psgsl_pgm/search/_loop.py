@@ -1,16 +1,34 @@
-"""The closed loop in the simulated house: the policy chooses each stop from the beliefs it has built so far.
+r"""The closed loop in the simulated house: the policy chooses each stop from the beliefs it has built so far.
 
 Per stop (the validation experiment's own per-step code, :class:`psgsl_pgm.experiment.VariantPosteriors` and
 :func:`psgsl_pgm.experiment.visit`):
 
-    drive along the geodesic path (the gas keeps evolving)  ->  turn the camera  ->  one gas reading, one wind
-    reading, one camera frame  ->  p(s | g) and both class-belief maps updated  ->  the variant's posterior
-    ->  the policy picks the next pose
+    drive along the geodesic path (the gas keeps evolving)  ->  found on the way?  ->  "not found" update
+    ->  turn the camera  ->  one gas reading, one wind reading, one camera frame  ->  p(s | g) and both
+    class-belief maps updated  ->  the variant's posterior  ->  the policy picks the next pose
 
 Every policy starts with the tour's first stop (a look-around at the start). The search ends when the robot
-comes within ``found_radius`` of the true source — of the emitting object's footprint when the source is an
-object (a robot cannot drive into an oven; its nearest drivable cell is 0.55 m from the oven's centre) — at
-any point of its path (found), or at ``time_budget`` s of simulated time.
+finds the source at any point of its path (found), or at ``time_budget`` s of simulated time; a find at
+t ≤ ``time_budget`` counts.
+
+**Found, and "not found here".** One detection model (:class:`psgsl_pgm.search.DetectionModel`) decides both.
+Under the hypothesis s = c the robot at x finds the source iff x lies within r = ``found_radius`` of c's found
+region R(c): the footprint of the object that owns c in the robot's map (an oven: a robot cannot drive into
+it, and its nearest drivable cell is 0.55 m from its centre), or c's own centre otherwise (a disc of radius r).
+The success rule is that rule with the true source as hypothesis (the emitting object, or the cell holding a
+point source). A move along path points x_1 … x_p (the drive and the stop) that does not find the source is an
+observation F̄ with
+
+.. math:: P(\bar F \mid s = c) = \begin{cases} m & \exists k:\ d(x_k, R(c)) \le r \\
+                                              1 & \text{otherwise} \end{cases}
+
+(m = ``miss_probability``, 0 by default: the visited hypotheses are ruled out), applied to p(s | g) after every
+move (:meth:`VariantPosteriors.condition`, :meth:`OlfactoryEstimator.condition`): p(s | g, F̄) ∝ p(s | g)
+P(F̄ | s). Since P(F̄ | s) depends on s only, every variant's fused posterior p(s | g, z, F̄) ∝ p(s | g, F̄)
+p(s | z) holds it exactly once. With m > 0 a move within reach of the true source finds it with probability
+1 − m (a draw from a generator seeded with the run's seed, used only then). The fixed tour of the validation
+experiment (``psgsl experiment``) does not apply this update: it measures estimation along a fixed path, where
+the robot is not searching.
 """
 
 from __future__ import annotations
@@ -24,6 +42,7 @@ from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
+from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
 from ._policies import POLICIES, Situation, check_score, choose
 from ._space import FreeSpace
@@ -56,6 +75,12 @@ class SearchConfig:
     score : {"per-time", "gain"}
         How ``infotaxis`` and ``space-aware-infotaxis`` score a candidate pose: its gain per second of driving,
         turning and sensing (the default), or its gain alone (:mod:`psgsl_pgm.search._policies`).
+    far_spacing : float or None
+        m, lattice spacing of the candidate positions beyond ``horizon``, over the whole reachable free space
+        (:mod:`psgsl_pgm.search._policies`); None: no candidates beyond the horizon.
+    miss_probability : float
+        In [0, 1): probability that a move within ``found_radius`` of the source's found region does not find
+        it (:class:`DetectionModel`); 0 is the deterministic rule.
     """
 
     found_radius: float = 0.5
@@ -67,6 +92,8 @@ class SearchConfig:
     start: tuple = (0.8, 6.0)
     credible: float = 0.9
     score: str = "per-time"
+    far_spacing: float | None = 1.0
+    miss_probability: float = 0.0
 
     def __post_init__(self):
         for f in fields(self):
@@ -79,13 +106,18 @@ class SearchConfig:
                 v = index(v, "n_headings", minimum=1)
             elif f.name == "credible":
                 v = unit_interval(v, "credible", low_open=True, high_open=True)
+            elif f.name == "miss_probability":
+                v = unit_interval(v, "miss_probability", high_open=True)
+            elif f.name == "far_spacing" and v is None:
+                pass
             else:
                 v = positive(v, f.name, "metres" if f.name != "time_budget" else "seconds")
             object.__setattr__(self, f.name, v)
 
     def to_dict(self) -> dict:
-        """The settings as JSON types; the default ``score`` is left out, so that runs stored before the option
-        existed still match (and resume)."""
+        """The settings as JSON types. The default ``score`` is left out (as runs stored before the option
+        existed have it); ``far_spacing`` and ``miss_probability`` are always written, so that runs stored
+        before the "not found" update and the far candidates — other searches — never resume into a new grid."""
         d = asdict(self)
         d["start"] = list(self.start)
         if d["score"] == "per-time":
@@ -169,13 +201,6 @@ class SearchRun:
         return float(self.driven / self.geodesic) if self.geodesic > 0 else float("nan")
 
 
-def _target_points(world, house) -> np.ndarray:
-    if world.source_object is not None:
-        cells = np.argwhere(world.source_object.mask(house.grid))
-        return house.grid.cell_to_world(cells)
-    return world.source[None, :]
-
-
 def _tour_plan(tour):
     """Tour stops back and forth for ever: yields (stop, headings)."""
     order = list(range(len(tour)))
@@ -217,7 +242,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     world_spec : world, optional, keyword-only
         The house, ontology, source region (the estimators' prior) and mapper beliefs
         (:func:`psgsl_pgm.load_world`); default: the embedded house, :func:`psgsl_pgm.sim.default_world` — the
-        validation experiment's own setting. A world file's ``start`` replaces ``search.start``.
+        validation experiment's own setting. A world file's ``start`` (or, when it names none, its default start,
+        :meth:`WorldSpec.start_for`) replaces ``search.start``.
 
     Returns
     -------
@@ -233,7 +259,9 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
     house = world.house
-    start_xy = search.start if world_spec is None or world_spec.start is None else tuple(setting.start_for(house))
+    # a world file's start (its own default when it names none: the navigable cell nearest the map's centre, as
+    # `world check` measures from); the embedded house: the search settings' start
+    start_xy = search.start if world_spec is None else tuple(float(v) for v in setting.start_for(house))
     if space is None:
         space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
                           n_headings=search.n_headings)
@@ -242,14 +270,15 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     plan = _tour_plan(tour) if policy == "tour" else None
     centres = house.grid.cell_centres()
     truth = world.source
-    target = _target_points(world, house)
     r = search.found_radius
     sense_time = world.gas_sensor.window
     budget = search.time_budget
+    detection = DetectionModel.from_house(house, r, miss_probability=search.miss_probability)
+    truth_hypothesis = detection.source_cell(truth, world.source_object, house)
+    misses = np.random.default_rng([int(seed), 0x5EA2C4]) if search.miss_probability > 0 else None
 
-    def near(points) -> np.ndarray:
-        d2 = ((np.asarray(points)[:, None, :] - target[None, :, :]) ** 2).sum(axis=-1)
-        return d2.min(axis=1) <= r * r
+    def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
+        return detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), truth_hypothesis)
 
     # geodesic distance from the start to where the source counts as found
     start_cell = space.snap(start_xy)
@@ -284,7 +313,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     start = space.position(start_cell)
     path_pts = [start]
     length = 0.0
-    found, t_found = bool(near(start[None])[0]), 0.0
+    found, t_found = False, 0.0  # a start within reach is found at t = 0 by the first stop's check
     post = record(start, tour.headings[0][-1], False, 0.0)
     headings = tuple(float(h) for h in tour.headings[0])
     cell, heading = start_cell, headings[-1]
@@ -304,7 +333,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             turn = 0.0  # the tour turns between its own headings (visit), as in the experiment
         else:
             sit = Situation(post, beliefs, variant, space, cell, heading, config.speed, config.turn_time,
-                            sense_time, search.horizon, r, cache, search.score)
+                            sense_time, search.horizon, r, cache, search.score, detection, search.far_spacing)
             dec = choose(policy, sit)
             cells = dec.path
             seg = space.position(cells)
@@ -313,7 +342,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             cell = dec.cell
         # found on the way?
         hits_on_path = near(seg)
-        if hits_on_path.any():
+        if hits_on_path.any() and (misses is None or misses.random() >= search.miss_probability):
             k = int(np.argmax(hits_on_path))
             arc = float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0
             t = world.time - t0 + arc / config.speed
@@ -325,6 +354,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                 break
         reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn,
                                       camera=not beliefs.mapped)
+        beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
         beliefs.observe(stop, reading, wind, frames)
         length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
         path_pts.extend(seg[1:])

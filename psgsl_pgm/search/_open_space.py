@@ -14,7 +14,11 @@ Proc. R. Soc. A 478: 20220118, observation model in 2-D, with the agent radius a
 truncated to two values (h = 0 or h ≥ 1).
 
 The belief is updated exactly by Bayes' rule on the whole grid at once (no loop over cells): a likelihood
-table over the (2N − 1)² offsets is sliced at the agent's position. Policies score the four moves from the
+table over the (2N − 1)² offsets is sliced at the agent's position. "Not found here" is the closed loop's
+detection model (:class:`psgsl_pgm.search.DetectionModel`) on the grid of unit cells with ``found_radius`` 0:
+the source is found in the agent's own cell, with probability 1 − ``miss_probability`` (default 1, OTTO's rule),
+and "not found" multiplies that cell's probability by ``miss_probability`` (0 by default). The success rule of
+:meth:`OpenSpaceSearch.move`, P_end of the policies and the update all use that one model. Policies score the four moves from the
 belief after "not found here" and the two outcomes hit / miss:
 
 * ``infotaxis`` — minimise the expected entropy (1 − P_end) Σ_h P(h) H(p_h) (Vergassola et al. 2007);
@@ -28,8 +32,14 @@ Ties go to the first move in the order −x, +x, −y, +y (OTTO's order) within 
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.special import k0, xlogy
+
+from .._grid import GridMap
+from .._validate import unit_interval
+from ._detection import DetectionModel
 
 __all__ = ["OPEN_SPACE_POLICIES", "OpenSpaceSearch", "grid_size", "hit_probability", "open_space_benchmark"]
 
@@ -86,6 +96,12 @@ def grid_size(*, lambda_over_dx: float, r_dt: float, p_outside: float = 1e-3) ->
     return 2 * (first + 1) + 1
 
 
+@functools.lru_cache(maxsize=16)
+def _unit_detection(n: int, miss_probability: float) -> DetectionModel:
+    """The detection model on the n × n grid of unit cells, radius 0 (shared by episodes: it caches rows)."""
+    return DetectionModel(GridMap(np.zeros((n, n), bool), 1.0), 0.0, miss_probability=miss_probability)
+
+
 def _entropy_bits(p, axis):
     return -np.sum(xlogy(p, p), axis=axis) / np.log(2)
 
@@ -99,6 +115,8 @@ class OpenSpaceSearch:
         λ/Δx and R·Δt.
     n : int, optional, keyword-only
         Odd grid size; default :func:`grid_size`.
+    miss_probability : float, keyword-only
+        m in [0, 1): probability of not finding the source in its own cell (0: OTTO's rule).
 
     Attributes
     ----------
@@ -110,7 +128,7 @@ class OpenSpaceSearch:
         ∝ 1 − exp(−μ(d)) on every cell but the centre (0 there).
     """
 
-    def __init__(self, *, lambda_over_dx: float, r_dt: float, n: int | None = None):
+    def __init__(self, *, lambda_over_dx: float, r_dt: float, n: int | None = None, miss_probability: float = 0.0):
         self.lambda_over_dx = _positive(lambda_over_dx, "lambda_over_dx")
         self.r_dt = _positive(r_dt, "r_dt")
         if n is None:
@@ -120,6 +138,9 @@ class OpenSpaceSearch:
         if n < 3 or n % 2 == 0:
             raise ValueError(f"n must be an odd integer >= 3, got {n}")
         self.n = int(n)
+        # the detection model on unit cells (x = col + ½, y = row + ½): found only in the source's own cell
+        self.detection = _unit_detection(self.n, unit_interval(miss_probability, "miss_probability",
+                                                               high_open=True))
         off = np.arange(-(self.n - 1), self.n)
         d = np.hypot(off[:, None], off[None, :])  # (2n−1, 2n−1) distances of every offset
         self._p_hit = hit_probability(d, lambda_over_dx=lambda_over_dx, r_dt=r_dt)
@@ -128,6 +149,16 @@ class OpenSpaceSearch:
         belief = self.likelihood(self.agent, True).copy()
         belief[tuple(self.agent)] = 0.0
         self.belief = belief / belief.sum()
+
+    @staticmethod
+    def _xy(cells) -> np.ndarray:
+        """(m, 2) positions (x, y) of (m, 2) (row, col) cells on the unit grid."""
+        c = np.asarray(cells, dtype=np.float64).reshape(-1, 2)
+        return c[:, ::-1] + 0.5
+
+    def _flat(self, cells) -> np.ndarray:
+        c = np.asarray(cells).reshape(-1, 2)
+        return c[:, 0] * self.n + c[:, 1]
 
     def _window(self, table, cell):
         r0, c0 = self.n - 1 - int(cell[0]), self.n - 1 - int(cell[1])
@@ -157,9 +188,12 @@ class OpenSpaceSearch:
             new cell.
         """
         cells, _ = self.neighbours()
-        p_end = self.belief[cells[:, 0], cells[:, 1]]
-        q = np.repeat(self.belief[None], len(cells), axis=0)
-        q[np.arange(len(cells)), cells[:, 0], cells[:, 1]] = 0.0
+        det = self.detection
+        rows = det.cell_rows(self._flat(cells), self._xy(cells))  # the hypotheses each move can find
+        p_end = det.found_probability(self.belief, rows)  # (1 − m) p(new cell)
+        w = np.ones((len(cells), self.n * self.n))
+        w[np.repeat(np.arange(len(cells)), [len(r) for r in rows]), np.concatenate(rows)] = det.miss_probability
+        q = self.belief[None] * w.reshape(len(cells), self.n, self.n)  # p(s) P(not found | s)
         rest = 1.0 - p_end
         q /= np.where(rest > 0, rest, 1.0)[:, None, None]  # p(s | not in the new cell)
         lik = np.stack([self._window(self._p_hit, c) for c in cells])  # (m, n, n): loop over ≤ 4 moves
@@ -207,7 +241,8 @@ class OpenSpaceSearch:
         if np.abs(cell - self.agent).sum() != 1 or not ((cell >= 0) & (cell < self.n)).all():
             raise ValueError(f"cell {cell.tolist()} is not one legal move from {self.agent.tolist()}")
         self.agent = cell
-        if tuple(cell) == tuple(source):
+        if self.detection.found(self._xy(cell), int(self._flat(source)[0]))[0] and (
+                self.detection.miss_probability == 0 or rng.random() >= self.detection.miss_probability):
             return True
         d = float(np.hypot(*(cell - np.asarray(source))))
         hit = bool(rng.random() < float(hit_probability(d, lambda_over_dx=self.lambda_over_dx, r_dt=self.r_dt)))
@@ -216,8 +251,10 @@ class OpenSpaceSearch:
 
     def observe(self, hit: bool) -> None:
         """Bayes' rule for "not in the agent's cell" and a hit/miss at the agent's cell."""
-        b = self.belief.copy()
-        b[tuple(self.agent)] = 0.0
+        (row,) = self.detection.cell_rows(self._flat(self.agent), self._xy(self.agent))
+        w = np.ones(self.n * self.n)
+        w[row] = self.detection.miss_probability  # P(not found here | s): the detection model's
+        b = self.belief * w.reshape(self.n, self.n)
         b *= self.likelihood(self.agent, bool(hit))
         total = b.sum()
         if not total > 0:
@@ -226,7 +263,7 @@ class OpenSpaceSearch:
 
 
 def open_space_benchmark(policy: str, *, lambda_over_dx: float, r_dt: float, episodes: int, seed: int,
-                         max_steps: int | None = None, n: int | None = None) -> dict:
+                         max_steps: int | None = None, n: int | None = None, miss_probability: float = 0.0) -> dict:
     """Monte-Carlo evaluation of a policy on the open-space POMDP (source drawn from the initial belief).
 
     Parameters
@@ -242,6 +279,8 @@ def open_space_benchmark(policy: str, *, lambda_over_dx: float, r_dt: float, epi
         Episodes longer than this are stopped and counted as not found; default 20 n².
     n : int, optional, keyword-only
         Grid size; default :func:`grid_size`.
+    miss_probability : float, keyword-only
+        Probability of not finding the source in its own cell (:class:`OpenSpaceSearch`).
 
     Returns
     -------
@@ -257,7 +296,7 @@ def open_space_benchmark(policy: str, *, lambda_over_dx: float, r_dt: float, epi
             raise TypeError(f"{name} must be an integer, got {v!r}")
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
-    template = OpenSpaceSearch(lambda_over_dx=lambda_over_dx, r_dt=r_dt, n=n)
+    template = OpenSpaceSearch(lambda_over_dx=lambda_over_dx, r_dt=r_dt, n=n, miss_probability=miss_probability)
     cap = 20 * template.n ** 2 if max_steps is None else int(max_steps)
     if cap < 1:
         raise ValueError(f"max_steps must be >= 1, got {max_steps}")
@@ -267,7 +306,8 @@ def open_space_benchmark(policy: str, *, lambda_over_dx: float, r_dt: float, epi
     found = np.zeros(int(episodes), dtype=bool)
     for e in range(int(episodes)):  # loop over episodes (each step is vectorised over cells)
         source = np.unravel_index(int(rng.choice(prior.size, p=prior)), template.belief.shape)
-        env = OpenSpaceSearch(lambda_over_dx=lambda_over_dx, r_dt=r_dt, n=template.n)
+        env = OpenSpaceSearch(lambda_over_dx=lambda_over_dx, r_dt=r_dt, n=template.n,
+                              miss_probability=miss_probability)
         t = 0
         while t < cap:
             t += 1

@@ -3,8 +3,26 @@ r"""Policies of the closed loop in a house: given the beliefs and the robot's po
 Every policy sees a :class:`Situation` (the variant's posterior, the beliefs, the robot's cell and heading,
 the free space) and returns a :class:`Decision` (the next cell, the camera headings there, the path).
 
-**Scoring rule** (:data:`SCORES`). Candidate poses p = (cell, heading) are those of
-:meth:`FreeSpace.candidates`. Each costs the time
+**Candidates: every room.** Candidate poses p = (cell, heading) are those of :meth:`FreeSpace.candidates`:
+the cells of the ``spacing`` lattice within ``horizon`` (geodesic) of the robot, and — with ``far_spacing``
+(:class:`SearchConfig`, 1 m by default) — the cells of a coarser lattice over the whole reachable free space
+beyond it, each at its geodesic travel time. Why the whole free space and not frontiers, room targets or a
+tree search: after the "not found" update the posterior's mass sits where the robot has not been, often in
+another room (a bed in a dead-end bedroom), and only a candidate there has a P_f large enough to pay for the
+drive; a frontier is ill-defined here (the map is known; what is unexplored is the belief), room-level targets
+would need a second scoring rule for "a room", and a tree search over short moves multiplies the cost of a
+decision by the branching factor per level while still seeing only a few metres ahead. The 1-m far lattice
+matches the found diameter 2r (a candidate every found disc), keeps ≈ 100 candidates in the embedded house,
+and a decision is one pass of the same gains over them; the robot re-plans at every stop, so a far target is
+only a direction until it is within the horizon. ``greedy`` keeps the horizon's candidates (it drives towards
+the MAP cell and re-plans every ``horizon`` metres).
+
+**P_f** is the probability of finding the source at p under the detection model of the success rule
+(:class:`psgsl_pgm.search.DetectionModel`): P_f(p) = (1 − m) Σ_{c: d(p, R(c)) ≤ r} p(c), R(c) the found region of
+hypothesis c (an object's footprint or c itself), m the miss probability; the belief after "not found at p" is
+p(c) w_p(c) / (1 − P_f), w_p(c) = m on those hypotheses, 1 elsewhere — the update the loop then applies.
+
+**Scoring rule** (:data:`SCORES`). Each candidate pose costs the time
 
 .. math:: \tau(p) = d(p)/v + t_\text{turn}\,|\Delta\theta(p)|/(\pi/2) + t_\text{sense},
 
@@ -13,7 +31,7 @@ as on the tour), and the fixed time of one gas reading.
 
 * ``"per-time"`` (the default) — a policy's gain G(p) is divided by τ(p): score(p) = G(p)/τ(p) when
   G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it).
-* ``"gain"`` — score(p) = G(p): the most informative pose within the horizon, however long it takes to reach.
+* ``"gain"`` — score(p) = G(p): the most informative candidate pose, however long it takes to reach.
   Dividing by τ favours the short, cheap moves around the robot where every pose gains little; in the house
   that kept infotaxis out of the bedroom (README, "Closed-loop search").
 
@@ -21,7 +39,7 @@ The best score wins; ties go to the first candidate (lattice order) and the firs
 moves (:meth:`FreeSpace.candidates`).
 
 * ``infotaxis`` — the expected information of the next stop, Vergassola et al. (2007) with the probability
-  P_f(p) of finding the source there (the posterior mass within ``found_radius``):
+  P_f(p) of finding the source there:
   G(p) = P_f(p) H(S) + (1 − P_f(p)) [φ_G(p) + φ_O(p)], φ_G = I(S; hit at p) under the variant's posterior and
   φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
   Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
@@ -29,10 +47,12 @@ moves (:meth:`FreeSpace.candidates`).
   distance to the source and H the entropy in bits, estimates log₂ of the remaining search; in the house D is
   the expected geodesic distance in units of the found diameter ℓ = 2 ``found_radius`` and H is counted over
   cells of one found disc (H − log₂(π r²/Δx²), floored at 0), so that one "cell" is what one visit can rule
-  out. G(p) = V_now − (1 − P_f) Σ_h P(h | p) V_h(p) over the gas outcome h ∈ {miss, hit}; the semantic
-  extension subtracts the view's expected information φ_O(p)/ln 2 bits from H_h.
-* ``greedy`` — drive towards the most probable cell: the candidate nearest (geodesic) to the MAP cell, with
-  the camera towards it.
+  out. G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
+  those of p(s | h, F̄) ∝ p(s) w_p(s) P(h | s) (:func:`space_aware_gain` computes them from cached rows without
+  forming that belief); the semantic extension subtracts the view's expected information φ_O(p)/ln 2 bits from
+  H_h.
+* ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
+  the MAP cell, with the camera towards it.
 * ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
 """
 
@@ -44,6 +64,7 @@ import numpy as np
 from scipy.special import entr
 
 from .._infogain import semantic_information_gain
+from ._detection import DetectionModel
 
 __all__ = ["Decision", "POLICIES", "SCORES", "Situation", "check_score", "choose", "olfactory_gain", "score_per_time",
            "travel_time"]
@@ -78,6 +99,11 @@ class Situation:
         map and the estimator only); one dict per run, empty at the start.
     score : {"per-time", "gain"}
         How ``infotaxis`` and ``space-aware-infotaxis`` score a pose (:data:`SCORES`).
+    detection : DetectionModel, optional
+        The detection model of P_f (:mod:`psgsl_pgm.search._detection`); default: discs of ``found_radius``
+        (no footprints, a detector that never misses).
+    far_spacing : float, optional
+        Lattice spacing (m) of the candidates beyond ``horizon`` over the whole free space; None: none.
     """
 
     posterior: np.ndarray
@@ -93,6 +119,8 @@ class Situation:
     found_radius: float
     cache: dict = field(default_factory=dict)
     score: str = "per-time"
+    detection: object = None
+    far_spacing: float | None = None
 
 
 @dataclass(frozen=True)
@@ -141,23 +169,35 @@ def _score(sit: Situation, gain, tau) -> np.ndarray:
     return np.asarray(gain, dtype=np.float64)  # "gain"
 
 
-def _candidates(sit: Situation):
-    cells, drive, pred = sit.space.candidates(sit.cell, sit.horizon)
+def _candidates(sit: Situation, *, far: bool = True):
+    cells, drive, pred = sit.space.candidates(sit.cell, sit.horizon, sit.far_spacing if far else None)
     turn = _wrap(sit.space.headings[None, :] - sit.heading)  # (1, n_h)
     tau = travel_time(drive[:, None], turn, speed=sit.speed, turn_time=sit.turn_time, sense_time=sit.sense_time)
     return cells, drive, pred, tau
 
 
+def _detection(sit: Situation) -> DetectionModel:
+    """The situation's detection model (a disc model of ``found_radius`` when none is given, kept in the cache)."""
+    if sit.detection is not None:
+        return sit.detection
+    model = sit.cache.get("detection")
+    if model is None or model.found_radius != sit.found_radius:
+        model = sit.cache["detection"] = DetectionModel(sit.space.grid, sit.found_radius)
+    return model
+
+
 def _found_mass(sit: Situation, cells):
-    """P_f: posterior mass within found_radius of each candidate cell, (K,), and those cells (list of flat arrays)."""
-    post = sit.posterior.ravel()
-    discs = [sit.space.disc(c, sit.found_radius) for c in np.asarray(cells).tolist()]  # loop over candidates
-    return np.array([post[d].sum() for d in discs]), discs
+    """P_f of each candidate cell, (K,), and the hypotheses it finds (list of flat arrays), by the detection
+    model (:meth:`DetectionModel.found_probability`)."""
+    model = _detection(sit)
+    rows = model.cell_rows(cells, sit.space.position(cells))
+    return model.found_probability(sit.posterior, rows), rows
 
 
-def _hit_rows(sit: Situation, cells):
-    """(K, H·W) P(hit at the cell | s) and its binary entropy H_b, cached per cell for the run (and emptied when
-    the estimator's plume model is re-solved with a new wind estimate)."""
+def _hit_blocks(sit: Situation, cells) -> list:
+    """Per candidate cell, the (3, H·W) static rows [P(hit at the cell | s), H_b = entr(P) + entr(1 − P),
+    entr(P)], cached per cell for the run (they depend on the map and the estimator's plume model only, and are
+    emptied when that model is re-solved with a new wind estimate)."""
     model = sit.beliefs.estimator.model
     if sit.cache.get("model") is not model:
         sit.cache.clear()
@@ -167,18 +207,31 @@ def _hit_rows(sit: Situation, cells):
     if missing:
         p = sit.beliefs.estimator.hit_probability(sit.space.position(missing)).reshape(len(missing), -1)
         for c, row in zip(missing, p):
-            sit.cache[c] = (row, entr(row) + entr(1.0 - row))
-    rows = [sit.cache[c] for c in cells]
-    return np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows])
+            e1 = entr(row)
+            block = np.stack([row, e1 + entr(1.0 - row), e1])
+            block.flags.writeable = False
+            sit.cache[c] = block
+    return [sit.cache[c] for c in cells]
+
+
+def _finite_distances(sit: Situation, cell: int) -> np.ndarray:
+    """(H·W,) geodesic distances from ``cell``, 0 where unreachable (no mass there), cached for the run."""
+    key = ("distance", int(cell))
+    d = sit.cache.get(key)
+    if d is None:
+        d = sit.space.distances(cell)
+        d = sit.cache[key] = np.where(np.isfinite(d), d, 0.0)
+    return d
 
 
 def olfactory_gain(sit: Situation, cells) -> np.ndarray:
     """φ_G = I(S; hit at p) = H_b(Σ_s p(s) P_p(s)) − Σ_s p(s) H_b(P_p(s)) under the variant's posterior, (K,) nats
     (:meth:`OlfactoryEstimator.information_gain` with ``posterior=``, with the static rows cached)."""
-    p_hit, h_bin = _hit_rows(sit, cells)
     post = sit.posterior.ravel()
-    p_bar = p_hit @ post
-    return np.maximum(entr(p_bar) + entr(1.0 - p_bar) - h_bin @ post, 0.0)
+    # one (2, H·W) product per candidate, on its cached rows in place (no (K, H·W) copy)
+    dots = np.array([b[:2] @ post for b in _hit_blocks(sit, cells)]).reshape(-1, 2)
+    p_bar = dots[:, 0]
+    return np.maximum(entr(p_bar) + entr(1.0 - p_bar) - dots[:, 1], 0.0)
 
 
 def _view_information(sit: Situation, cells) -> np.ndarray:
@@ -210,7 +263,14 @@ def infotaxis_gain(sit: Situation, cells):
 
 
 def space_aware_gain(sit: Situation, cells):
-    """G(p) of space-aware infotaxis, (K, n_headings), bits of log₂(remaining search)."""
+    """G(p) of space-aware infotaxis, (K, n_headings), bits of log₂(remaining search).
+
+    With u = p ∘ w_p the posterior times the likelihood w_p of "not found at p" (the detection model) and ℓ the
+    likelihood of a gas outcome, the outcome's unnormalised posterior is u ℓ, Z = ℓ·u, and its entropy and
+    expected distance are H = log Z + [ℓ·entr(u) + u·entr(ℓ)]/Z and D = (ℓ ∘ d_p)·u / Z (entr(x) = −x log x);
+    entr(u) = w entr(p) + p entr(w). Every term is a product of a static row (ℓ, entr(ℓ), d_p, cached per cell)
+    with p or entr(p), corrected on the few hypotheses that p finds: no (K, H·W) logarithm per decision.
+    """
     space = sit.space
     post = sit.posterior.ravel()
     ell = 2.0 * sit.found_radius
@@ -224,32 +284,56 @@ def space_aware_gain(sit: Situation, cells):
     dist_now = space.distances(sit.cell)
     ok = np.isfinite(dist_now)
     v_now = value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
-    p_f, discs = _found_mass(sit, cells)
-    q = np.repeat(post[None, :], len(cells), axis=0)
-    for k, d in enumerate(discs):  # loop over candidates: not found within the radius of the candidate
-        q[k, d] = 0.0
-    q /= np.where(1 - p_f > 0, 1 - p_f, 1.0)[:, None]
-    lik, _ = _hit_rows(sit, cells)  # (K, n)
-    dist = np.stack([space.distances(c) for c in np.asarray(cells).tolist()])  # (K, n), cached per cell
-    dist = np.where(np.isfinite(dist), dist, 0.0)  # unreachable cells carry no mass
+    p_f, rows = _found_mass(sit, cells)
+    a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
+    e_w = float(entr(1.0 - a))  # entr(w) on those hypotheses (0 for a detector that never misses)
+    e = entr(post)
+    k_n = len(cells)
+    pe = np.stack([post, e], axis=1)  # (n, 2)
+    dense = np.empty((k_n, 6))  # per candidate: L·p, L·e, H_b·p, entr(L)·p, (L∘d)·p, d·p  (L = P(hit), e = entr(p))
+    corr = np.empty((k_n, 8))  # the same six over the hypotheses the candidate finds, then Σp and Σe there
+    for k, (block, row, c) in enumerate(zip(_hit_blocks(sit, cells), rows, np.asarray(cells).tolist())):
+        d = _finite_distances(sit, c)  # loop over candidates (tens): products on cached rows, no copies
+        lpe = block[0] @ pe
+        ld = block[0] * d
+        dense[k] = (lpe[0], lpe[1], block[1] @ post, block[2] @ post, ld @ post, d @ post)
+        b_m, p_m, e_m = block[:, row], post[row], e[row]
+        corr[k] = (b_m[0] @ p_m, b_m[0] @ e_m, b_m[1] @ p_m, b_m[2] @ p_m, ld[row] @ p_m, d[row] @ p_m,
+                   p_m.sum(), e_m.sum())
+
+    def times_u(j):  # X·u = X·p − a Σ_found X p  (u = p ∘ w)
+        return dense[:, j] - a * corr[:, j]
+
+    mass = post.sum() - a * corr[:, 6]  # Σ u = 1 − P_f
+    ent_u = (e.sum() - a * corr[:, 7]) + e_w * corr[:, 6]  # Σ entr(u)
+    z_hit = times_u(0)
+    l_ent_u = times_u(1) + e_w * corr[:, 0]  # ℓ_hit · entr(u)
+    u_e_bin = times_u(2)  # u · (entr(ℓ_hit) + entr(ℓ_miss))
+    u_e_hit = times_u(3)  # u · entr(ℓ_hit)
+    d_hit = times_u(4)
+    d_all = times_u(5)
+    outcomes = ((z_hit, l_ent_u + u_e_hit, d_hit),  # hit
+                (mass - z_hit, (ent_u - l_ent_u) + (u_e_bin - u_e_hit), d_all - d_hit))  # miss
     phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)
-    expected = np.zeros((len(cells), len(space.headings)))
-    for like in (lik, 1.0 - lik):  # the two gas outcomes: hit, miss
-        joint = q * like
-        z = joint.sum(axis=1)  # P(h | p, not found)
-        post_h = joint / np.where(z > 0, z, 1.0)[:, None]
-        h_bits = entr(post_h).sum(axis=1) / np.log(2)
-        d_h = (post_h * dist).sum(axis=1)
-        expected += z[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
+    expected = np.zeros((k_n, len(space.headings)))
+    norm = np.where(mass > 0, mass, 1.0)
+    for z, t, d in outcomes:
+        pos = z > 0
+        zz = np.where(pos, z, 1.0)
+        h_bits = np.where(pos, np.log(zz) + t / zz, 0.0) / np.log(2)
+        d_h = np.where(pos, d / zz, 0.0)
+        expected += (np.where(pos, z, 0.0) / norm)[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
     return v_now - (1.0 - p_f[:, None]) * expected
 
 
 def choose(policy: str, sit: Situation) -> Decision:
     """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
     if policy == "greedy":
-        cells, drive, pred, tau = _candidates(sit)
+        cells, drive, pred, tau = _candidates(sit, far=False)  # towards the MAP, re-planned within the horizon
         target = int(np.argmax(sit.posterior))  # the MAP cell
-        d_target = np.array([sit.space.distances(c)[target] for c in cells.tolist()])
+        # geodesic distance from each candidate to the MAP cell (symmetric graph: one Dijkstra from the MAP's
+        # nearest drivable cell, then straight to the MAP cell, as FreeSpace.distances)
+        d_target = sit.space.distances(sit.space.snap(sit.space.position(target)))[cells] + sit.space.offset(target)
         rank = np.lexsort((tau.min(axis=1), d_target))  # nearest to the MAP cell, then quickest
         k = int(rank[0])
         to = sit.space.position(target) - sit.space.position(cells[k])

@@ -1,9 +1,9 @@
 """Where the robot can go and what it can see from there: the free-space graph, candidate poses, and cached
 per-position views and geodesic distances.
 
-Candidate poses of a decision (issue 15, item 1): the cells of a fixed lattice (spacing ``spacing``) that are
-navigable and within ``horizon`` metres of the robot *along the free-space graph*, plus the robot's own
-cell, each with ``n_headings`` camera headings.
+Candidate poses of a decision: the cells of a fixed lattice (spacing ``spacing``) that are navigable and within
+``horizon`` metres of the robot *along the free-space graph*, and optionally those of a coarser lattice
+(``far_spacing``) over the rest of the reachable free space, each with ``n_headings`` camera headings.
 
 Views: the camera sees F_p = field_of_view(p) ∩ free (what :meth:`psgsl_pgm.sim.Camera.visible` returns). The
 line of sight does not depend on the heading: it comes from the core's :class:`psgsl_pgm.ViewCache` of the
@@ -110,6 +110,10 @@ class FreeSpace:
             out.append(int(pred[out[-1]]))
         return np.array(out[::-1])
 
+    def offset(self, cell: int) -> float:
+        """m from ``cell``'s centre straight to its nearest navigable cell's centre (0 on navigable cells)."""
+        return float(self._offset[int(cell)])
+
     def distances(self, cell: int) -> np.ndarray:
         """(H·W,) geodesic distance (m) from navigable ``cell`` to every cell (cached; inf if unreachable)."""
         cell = int(cell)
@@ -125,23 +129,51 @@ class FreeSpace:
             self._dist_cache.move_to_end(cell)
         return d
 
-    def candidates(self, cell: int, horizon: float):
+    def far_lattice(self, spacing: float) -> np.ndarray:
+        """(H, W) bool: navigable cells of a lattice of ``spacing`` m (cached), the targets beyond the horizon."""
+        key = ("far", float(spacing))
+        hit = self._discs.get(key)
+        if hit is None:
+            step = max(1, int(round(float(spacing) / self.resolution)))
+            lat = np.zeros(self.nav.shape, bool)
+            lat[step // 2 :: step, step // 2 :: step] = True
+            hit = lat & self.nav
+            hit.flags.writeable = False
+            self._discs[key] = hit
+        return hit
+
+    def candidates(self, cell: int, horizon: float, far_spacing: float | None = None):
         """Candidate positions of a decision at ``cell``.
+
+        Parameters
+        ----------
+        cell : int
+            The robot's flat cell.
+        horizon : float
+            m (geodesic) within which the candidates are the lattice of ``spacing``.
+        far_spacing : float, optional
+            Beyond ``horizon``: every navigable cell of a lattice of this spacing in the whole reachable free
+            space, at its geodesic distance (None: none beyond the horizon).
 
         Returns
         -------
         cells : (K,) ndarray of int
-            The navigable lattice cells within ``horizon`` (geodesic) other than the robot's own — the robot
+            The candidate cells other than the robot's own — the robot
             always moves, as in the open-space POMDP (staying would repeat a gas reading that the estimators
             treat as independent of the last one, an over-count the scoring per unit time would reward) —
-            or the robot's own cell alone when no other is within reach.
+            or the robot's own cell alone when no other is within reach. Near ones first (lattice order),
+            then the far ones (lattice order).
         drive : (K,) ndarray
             Their geodesic distances, m.
         pred : (H·W,) ndarray
             Dijkstra predecessors from ``cell`` (for :meth:`path`).
         """
-        dist, pred = self.reach(cell, horizon)
-        lat = np.flatnonzero(self.lattice.ravel() & np.isfinite(dist))
+        dist, pred = self.reach(cell, horizon if far_spacing is None else np.inf)
+        near = np.isfinite(dist) & (dist <= horizon)
+        lat = np.flatnonzero(self.lattice.ravel() & near)
+        if far_spacing is not None:
+            far = np.flatnonzero(self.far_lattice(far_spacing).ravel() & np.isfinite(dist) & ~near)
+            lat = np.concatenate([lat, far])
         cells = lat[lat != cell]
         if cells.size == 0:
             cells = np.array([int(cell)])

@@ -140,6 +140,33 @@ def test_replace_model_equals_a_fresh_estimator_on_the_new_model():
         GridInfotaxis.from_model(a).replace_model(PlumeModel(np.zeros((12, 16), bool), resolution=0.25))
 
 
+def test_replace_model_keeps_the_not_found_factors_given_between_readings():
+    """A re-solved plume keeps what :meth:`condition` folded in: the result equals a fresh estimator on the new
+    model fed the same readings and the same "not found" factors in the same order."""
+    occ = np.zeros((12, 16), bool)
+    a = PlumeModel(occ, resolution=0.25, diffusivity=0.05, lifetime=20.0, encounter_scale=0.5)
+    wind = np.zeros((12, 16, 2))
+    wind[..., 1] = 0.1
+    b = PlumeModel(occ, resolution=0.25, wind=wind, diffusivity=0.03, lifetime=50.0, encounter_scale=0.8)
+    rng = np.random.default_rng(11)
+    stops = [(0.3 + 3.5 * rng.random(), 0.3 + 2.5 * rng.random()) for _ in range(8)]
+    hits = rng.random(8) < 0.4
+    factors = {2: (3, 4), 5: (8, 10)}  # after reading j: the source is not in cell (r, c) or its neighbours
+    for cls in (GridInfotaxis, PMFSEstimator):
+        moved, fresh = cls.from_model(a), cls.from_model(b)
+        for j, (x, h) in enumerate(zip(stops, hits)):
+            for est in (moved, fresh):
+                est.update(x, bool(h), (0.0, 0.1))
+                if j in factors:
+                    ll = np.zeros((12, 16))
+                    r, c = factors[j]
+                    ll[r - 1 : r + 2, c - 1 : c + 2] = -np.inf
+                    est.condition(ll)
+        moved.replace_model(b)
+        np.testing.assert_allclose(moved.posterior, fresh.posterior, rtol=1e-12, atol=1e-300)
+        assert moved.posterior[2:5, 3:6].max() == 0.0 and moved.posterior[7:10, 9:12].max() == 0.0
+
+
 def test_score_tempering_recovers_the_exponent_of_sources_drawn_from_the_tempered_posterior():
     rng = np.random.default_rng(5)
     lam0, n_cells = 0.4, 300

@@ -135,3 +135,39 @@ def test_illegal_move_is_refused():
     env = OpenSpaceSearch(lambda_over_dx=1.0, r_dt=1.0, n=5)
     with pytest.raises(ValueError, match="legal move"):
         env.move((0, 0), (1, 1), np.random.default_rng(0))
+
+
+@pytest.mark.parametrize("miss", [0.0, 0.3])
+def test_not_found_update_leaves_the_modelled_mass_and_matches_the_success_rule(miss):
+    """The open-space loop uses the closed loop's detection model: "not found" multiplies the agent's cell by m,
+    P_end = (1 − m) p(new cell), and the success rule finds a source only in the agent's own cell."""
+    env = OpenSpaceSearch(lambda_over_dx=2.0, r_dt=2.0, n=9, miss_probability=miss)
+    env.agent = np.array([4, 5])
+    before = env.belief.copy()
+    env.observe(True)
+    lik = env.likelihood(env.agent, True)
+    w = np.ones_like(before)
+    w[4, 5] = miss
+    expect = before * w * lik
+    np.testing.assert_allclose(env.belief, expect / expect.sum(), rtol=1e-12, atol=1e-300)
+    a = before[4, 5] * lik[4, 5]
+    share = miss * a / (miss * a + (before * lik).sum() - a)
+    np.testing.assert_allclose(env.belief[4, 5], share, rtol=1e-12, atol=1e-300)
+    o = env.outcomes()
+    np.testing.assert_allclose(o["p_end"], (1 - miss) * env.belief[o["cells"][:, 0], o["cells"][:, 1]], rtol=1e-15)
+    det = env.detection
+    for x in o["cells"]:  # success rule vs the hypotheses each move can find, every source cell
+        xy = env._xy(x)
+        row = det.rows(xy).toarray()[0]
+        for s in range(env.n * env.n):
+            assert det.found(xy, s)[0] == row[s] == (s == x[0] * env.n + x[1])
+
+
+def test_a_detector_that_misses_needs_more_steps_and_is_seeded():
+    a = open_space_benchmark("infotaxis", lambda_over_dx=1.0, r_dt=1.0, episodes=20, seed=5, miss_probability=0.5)
+    b = open_space_benchmark("infotaxis", lambda_over_dx=1.0, r_dt=1.0, episodes=20, seed=5, miss_probability=0.5)
+    c = open_space_benchmark("infotaxis", lambda_over_dx=1.0, r_dt=1.0, episodes=20, seed=5)
+    np.testing.assert_array_equal(a["steps"], b["steps"])
+    assert a["steps"].sum() > c["steps"].sum()
+    with pytest.raises(ValueError, match="miss_probability"):
+        OpenSpaceSearch(lambda_over_dx=1.0, r_dt=1.0, miss_probability=1.0)

@@ -192,18 +192,109 @@ def test_hit_rows_follow_a_re_solved_plume_model(house_space, situation):
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors
     from psgsl_pgm.olfaction import PlumeModel
-    from psgsl_pgm.search._policies import _hit_rows
+    from psgsl_pgm.search._policies import _hit_blocks
     from psgsl_pgm.sim import make_world
 
     house, space = house_space
     beliefs = VariantPosteriors(make_world(house, seed=1, warm_up=5.0), "infotaxis", ExperimentConfig())
     sit = Situation(**{**situation.__dict__, "beliefs": beliefs, "cache": {}})
     cells = space.candidates(sit.cell, 1.0)[0][:3]
-    before, _ = _hit_rows(sit, cells)
+    before = np.stack([blk[0] for blk in _hit_blocks(sit, cells)])
     wind = np.zeros(house.shape + (2,))
     wind[house.grid.free, 0] = 0.3
     beliefs.estimator.replace_model(PlumeModel.from_grid_map(house.grid, wind, outlets=house.outlet))
-    after, _ = _hit_rows(sit, cells)
+    after = np.stack([blk[0] for blk in _hit_blocks(sit, cells)])
     want = beliefs.estimator.hit_probability(space.position(cells)).reshape(len(cells), -1)
     np.testing.assert_array_equal(after, want)
     assert not np.allclose(after, before)
+
+
+def test_far_candidates_cover_the_free_space_beyond_the_horizon(house_space):
+    _, space = house_space
+    cell = space.snap((3.0, 6.0))
+    near, _, _ = space.candidates(cell, 2.0)
+    cells, drive, pred = space.candidates(cell, 2.0, 1.0)
+    full = dijkstra(space.graph, indices=cell)
+    np.testing.assert_array_equal(cells[: len(near)], near)  # the horizon's candidates first, unchanged
+    far = cells[len(near):]
+    expect = np.flatnonzero(space.far_lattice(1.0).ravel() & np.isfinite(full) & (full > 2.0))
+    np.testing.assert_array_equal(np.sort(far), expect)
+    np.testing.assert_allclose(drive, full[cells], rtol=1e-12)
+    rooms = {int(space.house.room_labels.ravel()[c]) for c in far}
+    assert rooms == set(range(len(space.house.room_names)))  # every room is a candidate target
+    path = space.path(pred, far[-1])
+    assert path[0] == cell and space.nav.ravel()[path].all()
+
+
+def _brute_found_cells(house, xy, r):
+    """Hypotheses a robot at xy finds, written out: footprints (last object owns a cell) grown by r, else discs."""
+    centres = house.grid.cell_centres().reshape(-1, 2)
+    owner = np.full(centres.shape[0], -1)
+    for j, m in enumerate(house.object_masks):
+        owner[m.ravel()] = j
+    out = (owner < 0) & (np.linalg.norm(centres - xy, axis=1) <= r)
+    for j, m in enumerate(house.object_masks):
+        if np.linalg.norm(centres[m.ravel()] - xy, axis=1).min() <= r:
+            out |= owner == j
+    return out
+
+
+def _space_aware_direct(sit, cells, miss):
+    """Space-aware gain by the (K, H·W) computation: q = p(s | not found at p), both gas outcomes."""
+    space, post = sit.space, sit.posterior.ravel()
+    ell, disc_bits = 2 * sit.found_radius, np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
+
+    def value(d, h):
+        arg = d / ell + 2.0 ** (np.maximum(h - disc_bits, 0.0) - 1.0) - 0.5
+        return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
+
+    d_now = space.distances(sit.cell)
+    ok = np.isfinite(d_now)
+    v_now = value(post[ok] @ d_now[ok], entr(post).sum() / np.log(2))
+    house = space.house
+    xy = space.position(cells)
+    found = np.stack([_brute_found_cells(house, p, sit.found_radius) for p in xy])
+    w = np.where(found, miss, 1.0)
+    p_f = (1 - miss) * (found * post).sum(axis=1)
+    q = post * w
+    q /= q.sum(axis=1, keepdims=True)
+    lik = sit.beliefs.estimator.hit_probability(xy).reshape(len(cells), -1)
+    dist = np.stack([space.distances(c) for c in cells])
+    dist = np.where(np.isfinite(dist), dist, 0.0)
+    from psgsl_pgm.search._policies import _view_information
+
+    phi = _view_information(sit, cells) / np.log(2)
+    expected = 0.0
+    for like in (lik, 1 - lik):
+        joint = q * like
+        z = joint.sum(axis=1)
+        ph = joint / z[:, None]
+        h = entr(ph).sum(axis=1) / np.log(2)
+        expected = expected + z[:, None] * value((ph * dist).sum(axis=1)[:, None], h[:, None] - phi)
+    return v_now - (1 - p_f[:, None]) * expected, p_f
+
+
+@pytest.mark.parametrize("miss", [0.0, 0.3])
+def test_gains_use_the_detection_model_footprints_and_misses(situation, miss):
+    """P_f and the space-aware gain (its closed form over static rows) against the (K, H·W) computation with the
+    found regions written out, for candidates beside the oven (footprint) and elsewhere (discs)."""
+    from psgsl_pgm.search import DetectionModel
+
+    house = situation.space.house
+    model = DetectionModel.from_house(house, 0.5, miss_probability=miss)
+    sit = Situation(**{**situation.__dict__, "detection": model, "far_spacing": 1.0, "cache": {}})
+    cells, _, _ = sit.space.candidates(sit.cell, sit.horizon, 1.0)
+    oven = next(o for o in house.objects if o.class_name == "oven")
+    d_oven = np.linalg.norm(sit.space.position(cells) - oven.center, axis=1)
+    pick = np.concatenate([np.argsort(d_oven)[:3], [0, 1, len(cells) - 1]])
+    cells = cells[pick]
+    got = space_aware_gain(sit, cells)
+    expect, p_f = _space_aware_direct(sit, cells, miss)
+    np.testing.assert_allclose(got, expect, rtol=1e-9, atol=1e-12)
+    h_s = float(entr(sit.posterior).sum())
+    info = infotaxis_gain(sit, cells)
+    from psgsl_pgm.search._policies import _view_information, olfactory_gain
+
+    np.testing.assert_allclose(info, p_f[:, None] * h_s + (1 - p_f[:, None]) * (
+        olfactory_gain(sit, cells)[:, None] + _view_information(sit, cells)), rtol=1e-10)
+    assert p_f[:3].max() > 0  # the oven's footprint is within reach of the cells beside it

@@ -67,3 +67,23 @@ def test_an_unknown_source_name_is_refused_before_any_run(tmp_path, capsys):
     assert main(_args(world, out, "--sources", "piano")) == 2
     assert "piano" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_world_without_start_searches_from_its_default_start(tmp_path):
+    """No `start:` in the world file: the closed loop starts where `world check` measures from (the navigable
+    cell nearest the map's centre), not at the search settings' default start."""
+    import numpy as np
+
+    from psgsl_pgm.search import SearchConfig, run_closed_loop
+    from psgsl_pgm.sim import load_world
+
+    world = yaml.safe_load(HOUSE.read_text())
+    del world["start"]
+    path = tmp_path / "world.yaml"
+    path.write_text(yaml.safe_dump(world))
+    spec = load_world(path)
+    run = run_closed_loop("oven", 0, "tour", "olfaction", search=SearchConfig(time_budget=5.0), world_spec=spec)
+    want = spec.start_for(spec.house(0))
+    assert not np.allclose(want, SearchConfig().start)
+    np.testing.assert_array_equal(run.config["search"]["start"], want)
+    assert np.linalg.norm(run.position[0] - want) <= spec.house(0).grid.resolution  # the start cell's centre
