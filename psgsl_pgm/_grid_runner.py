@@ -401,6 +401,26 @@ def _backend(scheduler, workers, n_jobs):
 # ---------------------------------------------------------------------------------------------------- the loop
 
 
+class _NoBar:
+    """Stands in for tqdm's bar when no bar is shown, or tqdm (the sim extra) is not installed: the runner is core."""
+
+    def update(self, n=1):
+        pass
+
+    def close(self):
+        pass
+
+
+def _progress_bar(total: int, desc: str, progress: bool):
+    if not progress:
+        return _NoBar()
+    try:
+        from tqdm.auto import tqdm
+    except ModuleNotFoundError:  # a core-only install: the grid runs, without a bar
+        return _NoBar()
+    return tqdm(total=total, desc=desc, unit="run")
+
+
 def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable | None = None,
              scheduler: str | None = None, workers: int = 2, progress: bool = False,
              desc: str = "runs") -> GridReport:
@@ -457,9 +477,7 @@ def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable |
     if not pending:
         return GridReport(total, len(done_before), 0)
 
-    from tqdm.auto import tqdm
-
-    bar = tqdm(total=len(pending), desc=desc, unit="run", disable=not progress)
+    bar = _progress_bar(len(pending), desc, progress)
     backend = None
     inflight: dict = {}  # handle -> job
     attempts: dict = {}
