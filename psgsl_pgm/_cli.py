@@ -269,8 +269,11 @@ def main(argv=None) -> int:
         argv = ["demo"]
         args = parser.parse_args(argv)
     args.argv = argv  # for the resume hint after Ctrl-C
+    from ._grid_runner import command_label
+
     try:
-        return args.func(args)
+        with command_label(f"psgsl {args.command}"):  # progress bars say which command runs
+            return args.func(args)
     except _INPUT_ERRORS as exc:
         print(f"psgsl {args.command}: error: {error_line(exc)}", file=sys.stderr)
         return 2

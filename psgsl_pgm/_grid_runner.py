@@ -35,6 +35,7 @@ Minimal use::
 
 from __future__ import annotations
 
+import contextvars
 import os
 import signal
 import threading
@@ -46,7 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["CONNECT_TIMEOUT", "GridInterrupted", "GridJob", "GridReport", "MAX_ATTEMPTS", "WORKER_ENVIRON",
-           "atomic_write", "run_grid"]
+           "atomic_write", "command_label", "run_grid"]
 
 #: A job is given up (RuntimeError) after its worker process died this many times (dask's default
 #: ``distributed.scheduler.allowed-failures`` + 1 for the local pool; dask applies its own setting).
@@ -411,6 +412,20 @@ class _NoBar:
         pass
 
 
+#: The command whose grid this is (``"psgsl experiment"``), set by the CLI: the progress bar names it.
+_COMMAND: contextvars.ContextVar = contextvars.ContextVar("psgsl_command", default=None)
+
+
+@contextmanager
+def command_label(command: str):
+    """Label the progress bars of the grids run inside the block with ``command`` (``"psgsl search: ..."``)."""
+    token = _COMMAND.set(command)
+    try:
+        yield
+    finally:
+        _COMMAND.reset(token)
+
+
 def _progress_bar(total: int, desc: str, progress: bool):
     if not progress:
         return _NoBar()
@@ -418,7 +433,8 @@ def _progress_bar(total: int, desc: str, progress: bool):
         from tqdm.auto import tqdm
     except ModuleNotFoundError:  # a core-only install: the grid runs, without a bar
         return _NoBar()
-    return tqdm(total=total, desc=desc, unit="run")
+    command = _COMMAND.get()
+    return tqdm(total=total, desc=desc if command is None else f"{command}: {desc}", unit="run")
 
 
 def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable | None = None,

@@ -40,3 +40,35 @@ def test_estimate_uses_the_gas_named_by_gas_not_the_first(tmp_path, capsys):
     np.testing.assert_allclose(got, fuse(olf, semantic_source_probability(q, table["ammonia"], ont.class_prior)),
                                rtol=1e-12)
     assert np.max(np.abs(expected(table["smoke"]) / got - 1)) > 0.1  # the other gas would be visibly different
+
+
+def _double(x):
+    return 2 * x
+
+
+def _write(result, fh):
+    fh.write(str(result).encode())
+
+
+def test_the_progress_bar_names_the_command(tmp_path, monkeypatch, capsys):
+    import pytest
+
+    pytest.importorskip("tqdm", reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
+    from psgsl_pgm._grid_runner import GridJob, run_grid
+
+    def command(args):  # a command that runs a grid with its bar on, as experiment/search/demo do
+        run_grid([GridJob(tmp_path / "a.txt", _double, (1,))], write=_write,
+                 workers=1, progress=True, desc="search runs")
+        return 0
+
+    parser = cli.build_parser()
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    parser._subparsers._group_actions[0].choices["kitchen"].set_defaults(func=command)
+    assert cli.main(["kitchen"]) == 0
+    assert "psgsl kitchen: search runs" in capsys.readouterr().err
+    assert (tmp_path / "a.txt").read_text() == "2"
+    # outside a command (the library), the bar keeps the caller's label
+    run_grid([GridJob(tmp_path / "b.txt", _double, (2,))], write=_write, workers=1, progress=True,
+             desc="search runs")
+    err = capsys.readouterr().err
+    assert "search runs" in err and "psgsl" not in err
