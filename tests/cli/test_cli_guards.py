@@ -72,3 +72,15 @@ def test_the_progress_bar_names_the_command(tmp_path, monkeypatch, capsys):
              desc="search runs")
     err = capsys.readouterr().err
     assert "search runs" in err and "psgsl" not in err
+
+
+def test_demo_help_gives_the_time_readme_gives():
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    said = set(re.findall(r"(\d+–\d+ s)\s+(?:wall\s+)?on\s+(?:the\s+)?2\s+idle\s+cores", readme))
+    assert len(said) == 1, said  # README states the demo's time once, the same everywhere
+    sub = cli.build_parser()._subparsers._group_actions[0]
+    help_text = next(a.help for a in sub._choices_actions if a.dest == "demo")
+    assert f"{said.pop()} on 2 idle cores" in help_text
