@@ -20,6 +20,7 @@ COCO name           accepted aliases (any case, spaces/underscores/hyphens ignor
 ``laptop``          notebook
 ``sink``            washbasin, basin
 ``toilet``          wc
+``hair drier``      hair dryer
 ``bed``             (none)
 ==================  ===================================================================
 

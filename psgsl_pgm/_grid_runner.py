@@ -40,6 +40,7 @@ Minimal use::
 
 from __future__ import annotations
 
+import contextvars
 import os
 import signal
 import threading
@@ -51,7 +52,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["CONNECT_TIMEOUT", "GridInterrupted", "GridJob", "GridReport", "MAX_ATTEMPTS", "WORKER_ENVIRON",
-           "atomic_write", "grid_folder", "run_grid"]
+           "atomic_write", "command_label", "grid_folder", "run_grid"]
 
 #: A job is given up (RuntimeError) after its worker process died this many times (dask's default
 #: ``distributed.scheduler.allowed-failures`` + 1 for the local pool; dask applies its own setting).
@@ -503,6 +504,41 @@ def _backend(scheduler, workers, n_jobs):
 # ---------------------------------------------------------------------------------------------------- the loop
 
 
+class _NoBar:
+    """Stands in for tqdm's bar when no bar is shown, or tqdm (the sim extra) is not installed: the runner is core."""
+
+    def update(self, n=1):
+        pass
+
+    def close(self):
+        pass
+
+
+#: The command whose grid this is (``"psgsl experiment"``), set by the CLI: the progress bar names it.
+_COMMAND: contextvars.ContextVar = contextvars.ContextVar("psgsl_command", default=None)
+
+
+@contextmanager
+def command_label(command: str):
+    """Label the progress bars of the grids run inside the block with ``command`` (``"psgsl search: ..."``)."""
+    token = _COMMAND.set(command)
+    try:
+        yield
+    finally:
+        _COMMAND.reset(token)
+
+
+def _progress_bar(total: int, desc: str, progress: bool):
+    if not progress:
+        return _NoBar()
+    try:
+        from tqdm.auto import tqdm
+    except ModuleNotFoundError:  # a core-only install: the grid runs, without a bar
+        return _NoBar()
+    command = _COMMAND.get()
+    return tqdm(total=total, desc=desc if command is None else f"{command}: {desc}", unit="run")
+
+
 def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable | None = None,
              scheduler: str | None = None, workers: int = 2, progress: bool = False,
              desc: str = "runs") -> GridReport:
@@ -559,9 +595,7 @@ def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable |
     if not pending:
         return GridReport(total, len(done_before), 0)
 
-    from tqdm.auto import tqdm
-
-    bar = tqdm(total=len(pending), desc=desc, unit="run", disable=not progress)
+    bar = _progress_bar(len(pending), desc, progress)
     backend = None
     inflight: dict = {}  # handle -> job
     attempts: dict = {}

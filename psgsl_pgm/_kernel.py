@@ -37,6 +37,7 @@ import numba as nb
 import numpy as np
 
 from ._prefetch import prefetch
+from . import _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
 
 __all__ = [
     "CHUNK",

@@ -21,6 +21,7 @@ import math
 import numba as nb
 import numpy as np
 
+from . import _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
 from ._view_kernel import _exact
 
 __all__ = ["cast"]

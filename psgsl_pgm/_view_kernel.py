@@ -24,6 +24,8 @@ import math
 import numba as nb
 import numpy as np
 
+from . import _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
+
 __all__ = ["SLACK", "cone_mask", "cone_values"]
 
 SLACK = 8 * float(np.finfo(np.float64).eps)  # rounding slack of the bearing test, relative to the distance

@@ -110,6 +110,8 @@ def test_bad_voxeland_files_name_file_and_key(tmp_path, instances, message):
 
 
 def test_estimate_with_npz_and_voxeland(tmp_path, capsys):
+    pytest.importorskip("matplotlib", reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
+    pytest.importorskip("PIL", reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
     from psgsl_pgm import Ontology, fuse
     from psgsl_pgm._cli import main
     from psgsl_pgm.sim import save_ros_map

@@ -133,6 +133,8 @@ def test_bad_room_classes_name_the_file_and_key(tmp_path, text, message):
 
 def test_house_ontology_typo_gives_the_ontologys_message(monkeypatch):
     """The house's hand table is read by Ontology.from_dict: a misspelt class is named, not a KeyError."""
+    pytest.importorskip("matplotlib", reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
+    pytest.importorskip("PIL", reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
     from psgsl_pgm.sim import _house_ontology as mod
 
     real = mod.load_yaml

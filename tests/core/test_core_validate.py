@@ -22,7 +22,6 @@ from psgsl_pgm._validate import (
     real_pair,
     unit_interval,
 )
-from psgsl_pgm.networks import SemanticGSLProblem
 
 
 @pytest.mark.parametrize("bad, kind", [
@@ -108,6 +107,9 @@ def test_one_tolerance_per_dtype():
 @given(q=arrays(np.float32, (3, 4), elements=st.floats(0.0625, 1.0, width=32)))
 def test_semantic_gsl_problem_accepts_what_the_core_accepts(q):
     """float32 and slightly-off (1e-8) distributions are accepted by SemanticGSLProblem as by the core."""
+    pytest.importorskip("pgmpy", reason="the networks extra is not installed (pip install 'psgsl-pgm[networks]')")
+    from psgsl_pgm.networks import SemanticGSLProblem
+
     lik = (q / q.sum(axis=1, keepdims=True)).astype(np.float32)  # float32 rows: sums off by up to ~1e-7
     background = np.full(4, 0.25) + np.array([1e-8, 0, 0, 0])
     semantic_source_probability(lik, lik[0], background)  # the core accepts these
@@ -120,6 +122,8 @@ def test_semantic_gsl_problem_accepts_what_the_core_accepts(q):
 
 
 def test_every_wing_speaks_the_same_vocabulary():
+    for module in ("matplotlib", "PIL", "pgmpy"):  # the wings: the sim and networks extras
+        pytest.importorskip(module, reason="the all extra is not installed (pip install 'psgsl-pgm[all]')")
     from psgsl_pgm.olfaction import GridInfotaxis, PlumeModel
     from psgsl_pgm.sim import GasSensor
     from psgsl_pgm.teaching import approximation_error
