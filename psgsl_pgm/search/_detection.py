@@ -21,8 +21,10 @@ oven's centre.
 
 **What the robot may know.** The footprints come from the robot's own map: the same object footprints that the
 map marks as obstacles (:attr:`psgsl_pgm.sim.House.robot_obstacles` = walls | furniture | windows, with
-furniture the union of :attr:`~psgsl_pgm.sim.House.object_masks`). A mapping robot segments its obstacles into
-objects (each piece of furniture is one footprint); it does *not* learn their classes from the map (those come
+furniture the union of the objects' footprints; a map that draws furniture as occupied, as the lab's occupancy
+maps do, marks the same cells). A footprint is the object's whole outline on the grid, also where the map draws it
+as occupied: a robot within r of any part of the oven has found the oven. A mapping robot segments its obstacles
+into objects (each piece of furniture is one footprint); it does *not* learn their classes from the map (those come
 only through the noisy camera and the class beliefs), nor which object emits. Where footprints overlap (an oven
 on a countertop) a cell belongs to the object drawn last, the object the house's class map shows there. The
 simulator's truth enters only through the success rule's one argument, the true source's hypothesis
@@ -102,9 +104,21 @@ class DetectionModel:
 
     @classmethod
     def from_house(cls, house, found_radius: float, *, miss_probability: float = 0.0) -> "DetectionModel":
-        """The model on a house's map with its objects' footprints (:attr:`House.object_masks`, the furniture
-        of the robot's obstacle map)."""
-        return cls(house.grid, found_radius, footprints=house.object_masks, miss_probability=miss_probability)
+        """The model on a house's map with its objects' whole footprints (:meth:`SceneObject.mask`, the furniture
+        of the robot's obstacle map, including cells the map draws as occupied)."""
+        return cls(house.grid, found_radius, footprints=[o.mask(house.grid) for o in house.objects],
+                   miss_probability=miss_probability)
+
+    def region_mask(self, source_cell: int) -> np.ndarray:
+        """(H, W) bool: the found region R(c) of the hypothesis ``source_cell`` (module docstring): the footprint of
+        the object that owns the cell, or the cell itself."""
+        c = int(source_cell)
+        j = int(self.owner[c])
+        if j >= 0:
+            return self.footprints[j].reshape(self.shape).copy()
+        out = np.zeros(self.centres.shape[0], dtype=bool)
+        out[c] = True
+        return out.reshape(self.shape)
 
     # --- the rule ------------------------------------------------------------------------------------------
     def _points(self, points) -> np.ndarray:
@@ -183,7 +197,12 @@ class DetectionModel:
         cover all of its cells.
         """
         if source_object is None:
-            r, c = (int(v) for v in self.grid.world_to_cell(np.asarray(source_xy, dtype=np.float64)))
+            xy = np.asarray(source_xy, dtype=np.float64)
+            r, c = (int(v) for v in self.grid.world_to_cell(xy))
+            if not (0 <= r < self.shape[0] and 0 <= c < self.shape[1]):
+                x0, x1, y0, y1 = self.grid.extent
+                raise ValueError(f"the source position ({xy[0]:g}, {xy[1]:g}) m lies off the map (x in [{x0:g}, "
+                                 f"{x1:g}], y in [{y0:g}, {y1:g}])")
             return r * self.shape[1] + c
         j = next((i for i, o in enumerate(house.objects) if o is source_object), None)
         if j is None:  # an equal object (same class, name and footprint), e.g. read again from a world file

@@ -197,8 +197,9 @@ class WorldSpec:
                     sources=None) -> dict:
         """For every source: how far the robot drives to find it, and whether it can at all.
 
-        A source counts as found when the robot comes within ``found_radius`` of it — of the emitting object's
-        footprint cells when there is one (:meth:`source_target`), the closed loop's rule. The robot's cells are
+        A source counts as found by the closed loop's own rule, :class:`psgsl_pgm.search.DetectionModel`: when the
+        robot comes within ``found_radius`` of its found region — the emitting object's whole footprint when there
+        is one (:meth:`source_target`), else the centre of the cell holding it. The robot's cells are
         :class:`psgsl_pgm.search.FreeSpace`'s (free, not furniture or a window, more than ``clearance`` from
         each), the geodesic distances its free-space graph's.
 
@@ -223,6 +224,7 @@ class WorldSpec:
         from scipy import ndimage as ndi
 
         from .._validate import positive
+        from ..search._detection import DetectionModel
         from ..search._loop import SearchConfig
         from ..search._space import FreeSpace
         from ._camera import Camera
@@ -238,23 +240,17 @@ class WorldSpec:
                              f"than clearance {clearance:g} m from each)")
         d_start = space.distances(space.snap(self.start_for(house))).reshape(g.shape)
         out = {}
+        detection = DetectionModel.from_house(house, r)
+        nav_centres = space.centres[space.nav.ravel()]
         for name in (self.sources if sources is None else sources):
             xy, obj = self.source_target(name, house)
-            centres = g.cell_centres()
-            if obj is not None:  # distance of every cell centre to the footprint's cells (exact on centres)
-                mask = obj.mask(g)
-                dist = ndi.distance_transform_edt(~mask) * g.resolution
-                targets = centres[mask]
-            else:
-                dist = np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1])
-                targets = xy[None, :]
+            hypothesis = detection.source_cell(xy, obj, house)
+            region = detection.region_mask(hypothesis)
+            dist = ndi.distance_transform_edt(~region) * g.resolution  # centre to the region's centres (exact)
             gap = float(dist[space.nav].min())
-            # within r: the closed loop's own test, Σ (p − t)² <= r², on the few cells near the boundary
-            near = space.nav & (dist <= r + 1e-6)
-            rows = np.flatnonzero(near)
-            d2 = ((centres.reshape(-1, 2)[rows, None, :] - targets[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
-            near.ravel()[rows[d2 > r * r]] = False
-            cells = len(targets) if obj is not None else 0
+            near = np.zeros(g.shape, dtype=bool)
+            near[space.nav] = detection.found(nav_centres, hypothesis)  # the closed loop's own rule
+            cells = int(region.sum()) if obj is not None else 0
             geo = float(d_start[near].min()) if near.any() else float("inf")
             out[str(name) if isinstance(name, str) else f"{xy[0]:g},{xy[1]:g}"] = {
                 "object": None if obj is None else obj.name, "target_cells": cells, "gap": gap,

@@ -8,7 +8,7 @@ from psgsl_pgm.search import DetectionModel, SearchConfig, run_closed_loop
 
 def _brute_region(house, cell):
     """Found region of hypothesis ``cell`` written out: the footprint of the last object holding it, else it."""
-    for mask in reversed(house.object_masks):
+    for mask in reversed([o.mask(house.grid) for o in house.objects]):
         if mask.ravel()[cell]:
             return np.flatnonzero(mask.ravel())
     return np.array([cell])

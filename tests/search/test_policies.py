@@ -230,10 +230,10 @@ def _brute_found_cells(house, xy, r):
     """Hypotheses a robot at xy finds, written out: footprints (last object owns a cell) grown by r, else discs."""
     centres = house.grid.cell_centres().reshape(-1, 2)
     owner = np.full(centres.shape[0], -1)
-    for j, m in enumerate(house.object_masks):
+    for j, m in enumerate([o.mask(house.grid) for o in house.objects]):
         owner[m.ravel()] = j
     out = (owner < 0) & (np.linalg.norm(centres - xy, axis=1) <= r)
-    for j, m in enumerate(house.object_masks):
+    for j, m in enumerate([o.mask(house.grid) for o in house.objects]):
         if np.linalg.norm(centres[m.ravel()] - xy, axis=1).min() <= r:
             out |= owner == j
     return out

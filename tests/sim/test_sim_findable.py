@@ -71,7 +71,8 @@ def test_gap_and_geodesic_against_brute_force_and_the_loop(flat):
     d = np.sqrt(((nav_xy[:, None, :] - fp_xy[None, :, :]) ** 2).sum(-1))  # every pair
     assert f["oven"]["gap"] == pytest.approx(d.min(), rel=1e-12)
     assert f["oven"]["target_cells"] == len(fp_xy) == 36 and f["oven"]["object"] == "oven_0"
-    s1 = np.hypot(nav_xy[:, 0] - 4.0, nav_xy[:, 1] - 1.0).min()
+    cx, cy = g.cell_to_world(g.world_to_cell(np.array([4.0, 1.0])))  # a point source: the centre of its cell
+    s1 = np.hypot(nav_xy[:, 0] - cx, nav_xy[:, 1] - cy).min()
     assert f["S1"]["gap"] == pytest.approx(s1, rel=1e-12) and f["S1"]["object"] is None
     # the closed loop's own geodesic (computed before its first stop) is the one world check reports
     for name in ("oven", "S1"):
