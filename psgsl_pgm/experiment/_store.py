@@ -65,15 +65,16 @@ def load_run(path) -> RunResult:
         raise ValueError(f"{path} is not a run file written by psgsl ({reason}); delete it to recompute the run") from None
 
 
-def read_run_key(path) -> dict | None:
-    """The run key (:mod:`psgsl_pgm._run_key`) stored with a run, read without loading its arrays; None for a
-    run stored without one. ValueError naming the file if it is not a run file written by psgsl."""
+def read_run_key(path, *, kind: str = "run") -> dict | None:
+    """The run key (:mod:`psgsl_pgm._run_key`) stored with a run (of the experiment or the closed loop), read
+    without loading its arrays; None for a run stored without one. ValueError naming the file if it is not a
+    ``kind`` file written by psgsl."""
     path = Path(path)
     try:
         with load_npy(path, str(path)) as z:
             config = json.loads(str(z["config"]))
     except (*READ_ERRORS, KeyError, TypeError) as exc:
-        raise ValueError(f"{path} is not a run file written by psgsl ({' '.join(str(exc).split())}); delete it to "
-                         "recompute the run") from None
+        raise ValueError(f"{path} is not a {kind} file written by psgsl ({' '.join(str(exc).split())}); delete it "
+                         "to recompute the run") from None
     key = config.get("key") if isinstance(config, dict) else None
     return key if isinstance(key, dict) else None

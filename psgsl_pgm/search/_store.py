@@ -10,6 +10,7 @@ import numpy as np
 from .._grid_runner import atomic_write
 from .._npyfile import READ_ERRORS, load_npy
 from ..experiment._config import source_label
+from ..experiment._store import read_run_key as _read_run_key
 from ._loop import SearchRun
 
 __all__ = ["read_run_key", "load_search_run", "save_search_run", "search_run_path", "write_search_run"]
@@ -53,14 +54,5 @@ def load_search_run(path) -> SearchRun:
 
 
 def read_run_key(path) -> dict | None:
-    """The run key (:mod:`psgsl_pgm._run_key`) stored with a run, read without loading its arrays; None for a
-    run stored without one. ValueError naming the file if it is not a search run file written by psgsl."""
-    path = Path(path)
-    try:
-        with load_npy(path, str(path)) as z:
-            config = json.loads(str(z["config"]))
-    except (*READ_ERRORS, KeyError, TypeError) as exc:
-        raise ValueError(f"{path} is not a search run file written by psgsl ({' '.join(str(exc).split())}); delete it to "
-                         "recompute the run") from None
-    key = config.get("key") if isinstance(config, dict) else None
-    return key if isinstance(key, dict) else None
+    """The run key stored with a closed-loop run (:func:`psgsl_pgm.experiment._store.read_run_key`)."""
+    return _read_run_key(path, kind="search run")
