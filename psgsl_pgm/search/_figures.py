@@ -23,7 +23,7 @@ def plot_survival(groups: dict, *, title: str = ""):
     """
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.8, 4.4 + 0.12 * len(groups)), layout="constrained")
+    fig, ax = plt.subplots(figsize=(8.4, 4.4 + 0.12 * len(groups)), layout="constrained")
     budget = max(r.config["search"]["time_budget"] for v in groups.values() for r in v)
     styles = {"olfaction": ":", "semantics": "--", "semantics+rooms": "-"}
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
