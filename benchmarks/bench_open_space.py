@@ -1,4 +1,4 @@
-"""Open-space benchmark (issue 15, item 5): infotaxis and space-aware infotaxis on the Loisy & Eloy (2022)
+"""Open-space benchmark: infotaxis and space-aware infotaxis on the Loisy & Eloy (2022)
 source-tracking POMDP, episodes added in chunks until the relative standard error of the mean is ≤ 2 %.
 
     python benchmarks/bench_open_space.py [--out open_space.json] [--rel-sem 0.02] [--chunk 500]

@@ -1,4 +1,4 @@
-"""Closed-loop search speed (issue 15, item 7), as ratios to one semantic-term evaluation measured in the same
+"""Closed-loop search speed, as ratios to one semantic-term evaluation measured in the same
 process (not a test).
 
 * one decision: ``choose("infotaxis", ...)`` for ``semantics+rooms`` on the embedded house — φ_G (one I(S; hit)
