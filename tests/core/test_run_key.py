@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import shutil
 import sys
+from importlib.util import find_spec
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,10 @@ from psgsl_pgm.experiment import ExperimentConfig
 from psgsl_pgm.sim._worldfile import world_files
 
 from .key_worlds import one_byte_edit, sha, write_full_world
+
+#: The world files of these tests are written with the simulator's writers (map images, objects: the sim extra).
+needs_sim = pytest.mark.skipif(any(find_spec(m) is None for m in ("PIL", "matplotlib")),
+                               reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
 
 _OPENED: list = []
 _RECORDING = [False]
@@ -34,6 +39,7 @@ def full(tmp_path):
     return write_full_world(tmp_path)
 
 
+@needs_sim
 def test_world_files_lists_every_file_the_loader_opens(full):
     """The list is what the test wrote — and, independently, every file load_world opens (Python's audit hook
     sees each open) is either the world file or in the list."""
@@ -50,6 +56,7 @@ def test_world_files_lists_every_file_the_loader_opens(full):
     assert opened == {world.resolve(), *(p.resolve() for p in files.values())}
 
 
+@needs_sim
 def test_world_files_of_the_segmented_room_layout_and_a_single_csv(tmp_path):
     world, files = write_full_world(tmp_path, beliefs=False)
     (tmp_path / "rooms.yaml").write_text(yaml.safe_dump({"image": "Kitchen.pgm", "rooms": {255: "Kitchen"}}))
@@ -63,6 +70,7 @@ def test_world_files_of_the_segmented_room_layout_and_a_single_csv(tmp_path):
                                   "wind.gaden_csv": files["wind.gaden_csv[0]"]}
 
 
+@needs_sim
 def test_world_key_hashes_every_file_and_one_byte_changes_it(full):
     world, files = full
     key = world_key(world)
@@ -76,6 +84,7 @@ def test_world_key_hashes_every_file_and_one_byte_changes_it(full):
     assert world_key(world) == key
 
 
+@needs_sim
 def test_the_world_enters_by_content_not_by_path_layout_or_comments(full, tmp_path):
     world, _ = full
     copy = tmp_path / "elsewhere"
@@ -94,6 +103,7 @@ def test_the_world_enters_by_content_not_by_path_layout_or_comments(full, tmp_pa
     assert world_key(copy / "world.yaml")["world.wind.height"] == 1  # 1 and 1.0 are one number
 
 
+@needs_sim
 def test_key_differences_name_each_setting_with_both_values(full):
     world, files = full
     a = run_key("experiment", world_key(world), experiment=ExperimentConfig())
