@@ -16,7 +16,7 @@ import argparse
 import shlex
 import sys
 
-__all__ = ["EXIT_INTERRUPTED", "MAX_SEEDS", "MAX_WORKERS", "add_scheduler_argument", "interrupted", "positive_float",
+__all__ = ["EXIT_INTERRUPTED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "interrupted", "positive_float",
            "positive_int", "seed_count", "seed_range", "worker_count"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
@@ -74,6 +74,17 @@ def seed_range(first, count: int) -> range:
         raise ValueError(f"--first-seed + --seeds - 1 must be below 2**63 (seeds are stored as int64), got "
                          f"{str(first)!r} and {count}")
     return range(value, value + count)
+
+
+def add_found_arguments(parser) -> None:
+    """``--found-radius`` and ``--clearance`` (m), shared by ``psgsl search`` and ``psgsl world check``: what
+    counts as found and which cells are drivable (None: the closed loop's and the world file's defaults)."""
+    parser.add_argument("--found-radius", type=positive_float, default=None, metavar="M",
+                        help="a source counts as found within this distance of it (of its object's footprint), m "
+                        "(default: the closed loop's, 0.5)")
+    parser.add_argument("--clearance", type=positive_float, default=None, metavar="M",
+                        help="the robot's distance from walls, furniture and windows: which cells are drivable, m "
+                        "(default: the world file's 'clearance', else 0.25)")
 
 
 def worker_count(text):

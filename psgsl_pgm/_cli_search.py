@@ -6,8 +6,8 @@ import json
 import os
 from pathlib import Path
 
-from ._cli_grid import (MAX_SEEDS, MAX_WORKERS, add_scheduler_argument, interrupted, positive_float, positive_int,
-                        seed_count, seed_range, worker_count)
+from ._cli_grid import (MAX_SEEDS, MAX_WORKERS, add_found_arguments, add_scheduler_argument, interrupted,
+                        positive_float, positive_int, seed_count, seed_range, worker_count)
 
 __all__ = ["add_parser", "run"]
 
@@ -43,12 +43,7 @@ def add_parser(subparsers):
     p.add_argument("--score", choices=SCORES, default="per-time",
                    help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
                    "(default: %(default)s)")
-    p.add_argument("--found-radius", type=positive_float, default=None, metavar="M",
-                   help="the source is found within this distance of it (of its object's footprint), m "
-                   "(default: 0.5)")
-    p.add_argument("--clearance", type=positive_float, default=None, metavar="M",
-                   help="the robot's distance from walls, furniture and windows, m (default: the world file's "
-                   "'clearance', else 0.25)")
+    add_found_arguments(p)
     p.add_argument("--workers", type=worker_count, default=workers,
                    help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
     add_scheduler_argument(p)

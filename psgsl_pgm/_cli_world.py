@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ._cli_grid import add_found_arguments
+
 __all__ = ["add_parser", "run", "format_summary", "plot_world"]
 
 
@@ -16,27 +18,8 @@ def add_parser(subparsers) -> None:
     check.add_argument("world", help="world file (YAML; see README 'Your own house')")
     check.add_argument("--png", default=None, help="also draw map, rooms, objects, windows, wind and sources here")
     check.add_argument("--seed", type=int, default=0, help="seed of the house (only the built-in house varies)")
-    check.add_argument("--found-radius", type=_metres, default=None, metavar="M",
-                       help="a source counts as found within this distance of it (of its object's footprint); "
-                       "default: the closed loop's, 0.5 m")
-    check.add_argument("--clearance", type=_metres, default=None, metavar="M",
-                       help="the robot's distance from walls, furniture and windows: which cells are drivable "
-                       "(default: the world file's 'clearance', else 0.25 m)")
+    add_found_arguments(check)
     check.set_defaults(func=run)
-
-
-def _metres(text: str) -> float:
-    """argparse type: a positive finite number of metres."""
-    import argparse
-    import math
-
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number of metres, got {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number of metres, got {text!r}")
-    return v
 
 
 def run(args) -> int:
