@@ -90,7 +90,7 @@ def first_call_times() -> dict:
     rng = np.random.default_rng(1)
     out = {}
     t0 = time.perf_counter()
-    import psgsl_pgm._kernel  # noqa: F401  (imports numba)
+    import psgsl_pgm.kernels._belief  # noqa: F401  (imports numba)
 
     out["import numba kernels"] = time.perf_counter() - t0
     for dtype in (np.float64, np.float32):

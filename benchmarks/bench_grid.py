@@ -3,7 +3,7 @@
     python benchmarks/bench_grid.py [--runs 8] [--workers 2] [--stops N]
 
 Each backend computes the same grid (oven, infotaxis and pmfs, seeds 0…) into its own temporary directory
-through :func:`psgsl_pgm._grid_runner.run_grid`; the wall time covers the grid only (start-up of the pool or
+through :func:`psgsl_pgm.runs._runner.run_grid`; the wall time covers the grid only (start-up of the pool or
 cluster included, aggregation and figures excluded). The arrays of the two backends' run files are compared
 bit for bit.
 """
@@ -40,7 +40,7 @@ def _identical(x: bytes, y: bytes) -> bool:
 
 
 def main(argv=None) -> None:
-    from psgsl_pgm._grid_runner import run_grid
+    from psgsl_pgm.runs._runner import run_grid
     from psgsl_pgm.experiment._store import write_run
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -1,6 +1,6 @@
 r"""Sec. "Information Gain Optimization": I(S; O_n) and φ_O(p), on Network A with all evidence (z, g, ζ).
 
-Notation of ``psgsl_pgm._infogain``: f = p(s | g), ρ_i = Σ_γ p(γ | ζ) L_γi / β_i, q_n = p(o_n | z_n) under β,
+Notation of ``psgsl_pgm.core._infogain``: f = p(s | g), ρ_i = Σ_γ p(γ | ζ) L_γi / β_i, q_n = p(o_n | z_n) under β,
 w_c = q_c · ρ, P(c) = f_c w_c / U with U = Σ_c f_c w_c (the fused posterior), a_n = f_n / U.
 
 (I1) I(S; O_n) = H(S) − H(S | O_n) = H(S) − Σ_i p(o_ni | ev) H(S | o_ni, ev), every term from pgmpy's exact

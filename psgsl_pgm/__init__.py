@@ -23,15 +23,15 @@ Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian net
 ``psgsl_pgm.experiment`` (the paper's validation experiment), ``psgsl_pgm.teaching`` (notebook helpers).
 """
 
-from ._beliefs import room_evidence, update_class_probs
-from ._class_beliefs import ClassBeliefMap
-from ._fov import ViewCache, field_of_view, view_information_gain
-from ._fusion import fuse
-from ._grid import GridMap
-from ._infogain import semantic_information_gain
-from ._kitchen import kitchen_example, kitchen_ontology
-from ._ontology import Ontology
-from ._semantic import semantic_source_probability
+from .core._beliefs import room_evidence, update_class_probs
+from .core._class_beliefs import ClassBeliefMap
+from .core._fusion import fuse
+from .core._infogain import semantic_information_gain
+from .core._kitchen import kitchen_example, kitchen_ontology
+from .core._ontology import Ontology
+from .core._semantic import semantic_source_probability
+from .geometry._fov import ViewCache, field_of_view, view_information_gain
+from .geometry._grid import GridMap
 
 __version__ = "0.1.0"
 

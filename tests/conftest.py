@@ -1,4 +1,4 @@
-"""Fixtures shared by the test folders (tests/core, tests/sim, tests/olfaction, tests/experiment, ...)."""
+"""Fixtures shared by the test folders (tests/core, tests/geometry, tests/sim, tests/olfaction, tests/experiment, ...)."""
 
 from __future__ import annotations
 

@@ -13,13 +13,13 @@ the closed loop's, :mod:`psgsl_pgm.search`); :func:`run_experiment` a grid of so
 resumable); :func:`run_demo` the command ``psgsl demo``.
 """
 
+from ..sim._house_ontology import house_ontology
 from ._calibration import CALIBRATION_RUNS, Calibration, calibrate, calibrate_encounter_scale, calibration_runs
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
 from ._metrics import error_and_spread, mean_ci
 from ._reliability import plot_reliability, reliability_table
-from ..sim._house_ontology import house_ontology
 from ._run import RunResult, run_search
 from ._sources import check_sources
 from ._step import VariantPosteriors, visit

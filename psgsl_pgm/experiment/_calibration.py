@@ -24,8 +24,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..olfaction import (CalibrationRun, MeanWindEstimator, PlumeFit, PlumeModel, PMFSEstimator, ar1_tempering,
-                         fit_plume_parameters, hit_residuals, profile_log_likelihood, score_tempering)
+from ..olfaction import (
+    CalibrationRun,
+    MeanWindEstimator,
+    PlumeFit,
+    PlumeModel,
+    PMFSEstimator,
+    ar1_tempering,
+    fit_plume_parameters,
+    hit_residuals,
+    profile_log_likelihood,
+    score_tempering,
+)
 from ..sim import make_world
 from ._config import ExperimentConfig, parse_source
 from ._robot_models import wind_basis

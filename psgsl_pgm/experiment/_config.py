@@ -6,7 +6,7 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from .._validate import positive, real_pair
+from .._shared._validate import positive, real_pair
 
 __all__ = ["ESTIMATORS", "ExperimentConfig", "VARIANTS", "parse_source"]
 

@@ -6,8 +6,8 @@ import itertools
 from functools import lru_cache
 from pathlib import Path
 
-from .._grid_runner import GridJob, atomic_write, grid_folder, run_grid
-from .._run_key import digest, run_key, world_key
+from ..runs._key import digest, run_key, world_key
+from ..runs._runner import GridJob, atomic_write, grid_folder, run_grid
 from ..sim import default_house
 from ._config import ESTIMATORS, ExperimentConfig, parse_source, source_label
 from ._store import load_run, read_run_key, run_path, write_run
@@ -54,7 +54,7 @@ def search_in_world(source, seed, estimator, *, world=None, world_digest=None, *
 
 def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig, world=None,
                     world_digest=None) -> list:
-    """The grid's jobs (:class:`psgsl_pgm._grid_runner.GridJob`): one :func:`run_search` per (source, estimator,
+    """The grid's jobs (:class:`psgsl_pgm.runs._runner.GridJob`): one :func:`run_search` per (source, estimator,
     seed) in the world file ``world`` (None: the embedded house), its result to :func:`run_path`; the smallest
     seed keeps the progression figure's snapshots."""
     first = min(seeds)
@@ -66,7 +66,7 @@ def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig
 
 def experiment_key(config: ExperimentConfig, world_part: dict, *, flat: bool = False, source=None,
                    estimator=None) -> dict:
-    """The run key (:mod:`psgsl_pgm._run_key`) of an experiment's stored runs: the world's content, the
+    """The run key (:mod:`psgsl_pgm.runs._key`) of an experiment's stored runs: the world's content, the
     :class:`ExperimentConfig`, the package version and the folder's layout (``flat``: one source and estimator
     written straight into the folder, as ``psgsl demo`` does)."""
     layout = {"flat": True, "source": source_label(source), "estimator": estimator} if flat else {"flat": False}
@@ -87,9 +87,9 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     out : path, keyword-only
         Output directory; finished runs live in ``out/runs`` and are never redone (resumable). The folder holds
         one configuration: a stored run whose run key (the world file's content and the bytes of every file it
-        names, ``config``, the package version; :mod:`psgsl_pgm._run_key`) differs is refused, naming each
+        names, ``config``, the package version; :mod:`psgsl_pgm.runs._key`) differs is refused, naming each
         differing setting, before anything is created; a second process on the same folder is refused
-        (:func:`psgsl_pgm._grid_runner.grid_folder`).
+        (:func:`psgsl_pgm.runs._runner.grid_folder`).
     workers : int, keyword-only
         Worker processes of the local pool (1 = run in this process) or of ``scheduler="local"``.
     config : ExperimentConfig, optional, keyword-only
@@ -98,7 +98,7 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     flat : bool, keyword-only
         See :func:`write_outputs`.
     scheduler : None, "local" or str, optional, keyword-only
-        Where the runs go (:func:`psgsl_pgm._grid_runner.run_grid`): the local pool (None), a dask LocalCluster
+        Where the runs go (:func:`psgsl_pgm.runs._runner.run_grid`): the local pool (None), a dask LocalCluster
         of ``workers`` processes ("local"), or a running dask scheduler (``"tcp://HOST:PORT"``). Every backend
         gives bit-identical runs.
     world : str or Path, optional, keyword-only
@@ -113,7 +113,7 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
 
     Raises
     ------
-    psgsl_pgm._grid_runner.GridInterrupted
+    psgsl_pgm.runs._runner.GridInterrupted
         On Ctrl-C; the finished runs are on disk and the same call resumes.
     """
     config = ExperimentConfig() if config is None else config

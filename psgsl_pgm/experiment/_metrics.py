@@ -6,8 +6,15 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from .._validate import (as_float_array, check_nonnegative, check_sums, describe, real_number, real_pair,
-                         unit_interval)
+from .._shared._validate import (
+    as_float_array,
+    check_nonnegative,
+    check_sums,
+    describe,
+    real_number,
+    real_pair,
+    unit_interval,
+)
 
 __all__ = ["CALIBRATION_POINTS", "calibration_summary", "credible_region", "error_and_spread", "hpd_level", "mean_ci",
            "at_fractions"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._output import write_file_atomically
+from ..io._output import write_file_atomically
 
 __all__ = ["plot_reliability", "reliability_table"]
 

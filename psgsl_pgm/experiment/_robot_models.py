@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..sim import Camera, DetectorModel, HOUSE_CLASSES, default_house, potential_flow, take_frame
+from ..sim import HOUSE_CLASSES, Camera, DetectorModel, default_house, potential_flow, take_frame
 from ..sim._classes import OTHER, match_names
 from ..sim._house_ontology import REFERENCE_SEEDS
 from ._tour import exploration_tour

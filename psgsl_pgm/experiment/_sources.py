@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..sim import default_house
-
 from ._config import parse_source
 
 __all__ = ["check_sources"]
@@ -55,7 +54,7 @@ def _check(spec, house) -> None:
     if isinstance(spec, str):
         if not house.objects_of_class(spec):
             present = sorted({o.class_name for o in house.objects})
-            from ..sim._worldfile import _did_you_mean
+            from .._shared._validate import did_you_mean as _did_you_mean
 
             raise ValueError(f"source {spec!r} is no object class of the house{_did_you_mean(spec, present)}; "
                              f"classes present: {present}")

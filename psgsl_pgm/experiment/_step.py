@@ -19,10 +19,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from .._beliefs import room_evidence, update_class_probs
-from .._class_beliefs import ClassBeliefMap
-from .._fusion import fuse
-from .._semantic import semantic_source_probability
+from ..core._beliefs import room_evidence, update_class_probs
+from ..core._class_beliefs import ClassBeliefMap
+from ..core._fusion import fuse
+from ..core._semantic import semantic_source_probability
 from ..olfaction import GridInfotaxis, MeanWindEstimator, PlumeModel, PMFSEstimator
 from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._grid_runner import atomic_write
-from .._npyfile import READ_ERRORS, load_npy
+from ..io._npyfile import READ_ERRORS, load_npy
+from ..runs._runner import atomic_write
 from ._config import source_label
 from ._run import RunResult
 
@@ -34,7 +34,7 @@ def write_run(result: RunResult, fh) -> None:
 
 
 def save_run(result: RunResult, path) -> Path:
-    """Write ``result`` to ``path`` atomically (:func:`psgsl_pgm._grid_runner.atomic_write`: a temporary file
+    """Write ``result`` to ``path`` atomically (:func:`psgsl_pgm.runs._runner.atomic_write`: a temporary file
     and ``os.replace``, so a killed run leaves no file)."""
     return atomic_write(path, write_run, result)
 
@@ -66,7 +66,7 @@ def load_run(path) -> RunResult:
 
 
 def read_run_key(path, *, kind: str = "run") -> dict | None:
-    """The run key (:mod:`psgsl_pgm._run_key`) stored with a run (of the experiment or the closed loop), read
+    """The run key (:mod:`psgsl_pgm.runs._key`) stored with a run (of the experiment or the closed loop), read
     without loading its arrays; None for a run stored without one. ValueError naming the file if it is not a
     ``kind`` file written by psgsl."""
     path = Path(path)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._grid_runner import atomic_write
+from ..runs._runner import atomic_write
 from ._config import VARIANTS
 from ._metrics import calibration_summary, mean_ci
 

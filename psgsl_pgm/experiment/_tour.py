@@ -10,7 +10,7 @@ for every source, estimator and variant:
 3. order: from ``start``, go to the nearest unvisited area (geodesic distance), sweep its waypoints
    nearest-first, repeat;
 4. path: 8-connected geodesic shortest paths without corner cutting between consecutive waypoints (the
-   core's :func:`psgsl_pgm._grid.free_space_graph`, ``scipy.sparse.csgraph``);
+   core's :func:`psgsl_pgm.geometry._grid.free_space_graph`, ``scipy.sparse.csgraph``);
 5. stops: every ``stop_spacing`` metres of path; the camera looks along the direction of travel, and turns
    through four headings at every waypoint.
 """
@@ -23,7 +23,7 @@ import numpy as np
 from scipy import ndimage as ndi
 from scipy.sparse.csgraph import dijkstra
 
-from .._grid import free_space_graph
+from ..geometry._grid import free_space_graph
 
 __all__ = ["Tour", "exploration_tour"]
 

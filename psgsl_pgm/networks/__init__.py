@@ -11,7 +11,7 @@
 
 pgmpy is imported only here (``import psgsl_pgm`` stays light); it comes with the ``networks`` extra,
 ``pip install "psgsl-pgm[networks]"``. :class:`SemanticGSLProblem` itself is pure numpy and lives in the core
-(``psgsl_pgm._problem``); it is re-exported here, where its networks are.
+(``psgsl_pgm.core._problem``); it is re-exported here, where its networks are.
 """
 
 try:  # first: pgmpy imported without its import-time warnings; pgmpy is this subpackage's optional dependency
@@ -21,6 +21,7 @@ except ModuleNotFoundError as err:
         raise
     raise ImportError('psgsl_pgm.networks needs pgmpy (the "networks" extra): pip install "psgsl-pgm[networks]"') from err
 
+from ..core._problem import SemanticGSLProblem
 from ._cpds import check_normalised
 from ._draw import draw_network
 from ._export import CANONICAL, canonical_network, export
@@ -33,7 +34,6 @@ from ._inference import (
 )
 from ._network_a import build_network_a
 from ._network_b import MAX_TABLE_CELLS, build_network_b
-from .._problem import SemanticGSLProblem
 from ._underflow import MIN_EVIDENCE, log_evidence
 
 __all__ = [

@@ -1,16 +1,16 @@
 """The canonical example problems exported to ``networks/`` (the paper's kitchen, a 3×3 grid, gas types).
 
 The kitchen's ontology and its illustrative cells, detector and olfaction come from the one kitchen module,
-:mod:`psgsl_pgm._kitchen`.
+:mod:`psgsl_pgm.core._kitchen`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._kitchen import ETHANOL, FOUR_CELL_OLFACTION, FOUR_CELLS, kitchen_ontology
-from .._kitchen import detector_likelihood as _detector
-from .._problem import SemanticGSLProblem
+from ..core._kitchen import ETHANOL, FOUR_CELL_OLFACTION, FOUR_CELLS, kitchen_ontology
+from ..core._kitchen import detector_likelihood as _detector
+from ..core._problem import SemanticGSLProblem
 
 __all__ = ["gas_type_problem", "grid_problem", "kitchen_problem"]
 

@@ -7,7 +7,7 @@ import numpy as np
 from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
-from .._network_names import EVIDENCE_STATES
+from ._names import EVIDENCE_STATES
 
 __all__ = ["assemble", "check_normalised", "evidence_cpd", "root_cpd", "scaled"]
 

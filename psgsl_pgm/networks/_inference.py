@@ -6,7 +6,8 @@ import numpy as np
 from pgmpy.inference import VariableElimination
 from pgmpy.models import DiscreteBayesianNetwork
 
-from .._network_names import (
+from ..core._problem import SemanticGSLProblem
+from ._names import (
     ALPHA,
     ALPHA_STATES,
     EVIDENCE_STATES,
@@ -18,7 +19,6 @@ from .._network_names import (
     object_node,
     source_node,
 )
-from .._problem import SemanticGSLProblem
 from ._underflow import check_result, check_scale
 
 __all__ = [

@@ -6,9 +6,9 @@ import numpy as np
 from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
+from ..core._problem import SemanticGSLProblem
 from ._cpds import assemble, evidence_cpd, root_cpd
-from .._network_names import GAMMA, G_NODE, SOURCE, object_node, observation_node, zeta_node
-from .._problem import SemanticGSLProblem
+from ._names import G_NODE, GAMMA, SOURCE, object_node, observation_node, zeta_node
 
 __all__ = ["build_network_a", "gas_nodes"]
 

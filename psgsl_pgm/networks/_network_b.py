@@ -6,8 +6,9 @@ import numpy as np
 from pgmpy.factors.discrete import TabularCPD
 from pgmpy.models import DiscreteBayesianNetwork
 
+from ..core._problem import SemanticGSLProblem
 from ._cpds import assemble, evidence_cpd, root_cpd
-from .._network_names import (
+from ._names import (
     ALPHA,
     ALPHA_STATES,
     COUNTER_STATES,
@@ -19,7 +20,6 @@ from .._network_names import (
     source_node,
 )
 from ._network_a import _check_problem, gas_nodes, object_evidence
-from .._problem import SemanticGSLProblem
 
 __all__ = ["MAX_TABLE_CELLS", "build_network_b", "source_bernoulli"]
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
+from ..core._problem import SemanticGSLProblem
 from ._network_b import source_bernoulli
-from .._problem import SemanticGSLProblem
 
 __all__ = ["MIN_EVIDENCE", "check_result", "check_scale", "log_evidence"]
 

@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import k0
 
-from .._validate import positive as _positive
-from .._validate import real_pair
+from .._shared._validate import positive as _positive
+from .._shared._validate import real_pair
 
 __all__ = [
     "correlation_length",

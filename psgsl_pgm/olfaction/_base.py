@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import entr, logsumexp
 
-from .._validate import as_float_array
+from .._shared._validate import as_float_array
 from ._plume import PlumeModel
 from ._wind_input import as_wind_vector
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq, minimize
 
-from .._validate import as_array, as_float_array, describe, positive, unit_interval
+from .._shared._validate import as_array, as_float_array, describe, positive, unit_interval
 from ._plume import PlumeModel
 
 __all__ = ["CalibrationRun", "PlumeFit", "ar1_tempering", "encounter_scale_mle", "fit_encounter_scale",

@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse.csgraph import dijkstra
 
-from .._grid import GridMap
-from .._validate import positive as _positive
+from .._shared._validate import positive as _positive
+from ..geometry._grid import GridMap
 from ._wind_input import as_wind_vector
 
 __all__ = ["HitProbabilityMap"]

@@ -30,8 +30,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._grid import GridMap
-from .._validate import as_float_array
+from .._shared._validate import as_float_array
+from ..geometry._grid import GridMap
 
 __all__ = ["advection_diffusion_operator", "bernoulli"]
 

@@ -14,8 +14,9 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from .._grid import GridMap
-from .._validate import bool_mask, index as as_index, positive
+from .._shared._validate import bool_mask, positive
+from .._shared._validate import index as as_index
+from ..geometry._grid import GridMap
 from ._operator import advection_diffusion_operator
 from ._wind_input import as_wind_field
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import positive, unit_interval
+from .._shared._validate import positive, unit_interval
 from ._base import Observation, OlfactoryEstimator
 from ._hitmap import HitProbabilityMap
 from ._plume import PlumeModel

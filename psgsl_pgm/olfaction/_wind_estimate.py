@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._grid import GridMap
-from .._validate import as_float_array, real_pair
+from .._shared._validate import as_float_array, real_pair
+from ..geometry._grid import GridMap
 
 __all__ = ["MeanWindEstimator"]
 

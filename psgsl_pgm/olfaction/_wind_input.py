@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, real_pair
+from .._shared._validate import as_float_array, real_pair
 
 __all__ = ["as_wind_field", "as_wind_vector"]
 

@@ -6,6 +6,7 @@ experiment's own per-step code, declarations with credible regions, and the open
 from ._demo import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
 from ._detection import DetectionModel
 from ._figures import plot_paths, plot_survival
+from ._findable import check_findable, findability
 from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._loop import SearchConfig, SearchRun, run_closed_loop
 from ._metrics import credible_region, hpd_level, paired_difference, survival, wilson_interval
@@ -28,8 +29,10 @@ __all__ = [
     "SearchConfig",
     "SearchRun",
     "Situation",
+    "check_findable",
     "choose",
     "credible_region",
+    "findability",
     "grid_size",
     "hit_probability",
     "holm",

@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import bool_mask, positive, unit_interval
+from .._shared._validate import bool_mask, positive, unit_interval
 
 __all__ = ["DetectionModel"]
 

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
-from .._run_key import digest, run_key, world_key
 from ..experiment._driver import _world
 from ..experiment._metrics import calibration_summary, mean_ci
+from ..runs._key import digest, run_key, world_key
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import wilson_interval
 from ._policies import POLICIES
@@ -25,8 +25,8 @@ __all__ = ["PRIMARY", "run_search_grid", "summarize_runs", "write_search_outputs
 
 
 def search_key(config: ExperimentConfig, search: SearchConfig, world_part: dict) -> dict:
-    """The run key (:mod:`psgsl_pgm._run_key`) of the closed loop's stored runs: the world's content (its
-    :func:`psgsl_pgm._run_key.world_key`), both configs and the package version."""
+    """The run key (:mod:`psgsl_pgm.runs._key`) of the closed loop's stored runs: the world's content (its
+    :func:`psgsl_pgm.runs._key.world_key`), both configs and the package version."""
     return run_key("search", world_part, experiment=config, search=search)
 
 
@@ -258,17 +258,17 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     leaves every combination with about the same number of seeds. ``grid`` (keyword-only) replaces the full
     product by an explicit sequence of ``(source, policy, variant, estimator, seed)`` tuples, run in that order
     (e.g. the tour with one variant only: its path does not depend on the variant). ``scheduler``: the grid
-    runner's backend (:func:`psgsl_pgm._grid_runner.run_grid`: None = a local pool of ``workers`` processes,
+    runner's backend (:func:`psgsl_pgm.runs._runner.run_grid`: None = a local pool of ``workers`` processes,
     "local" = a dask LocalCluster, or a dask scheduler's address); Ctrl-C raises
-    :class:`psgsl_pgm._grid_runner.GridInterrupted` with every finished run on disk. ``world`` (keyword-only):
+    :class:`psgsl_pgm.runs._runner.GridInterrupted` with every finished run on disk. ``world`` (keyword-only):
     a world file (:func:`psgsl_pgm.load_world`; sources may then be its source names), loaded and checked
     before any output is written; default: the embedded house.
 
     Finished runs live in ``out/runs`` (one atomic file each) and are never redone. The folder holds one
     configuration: a stored run whose run key (the world file's content and the bytes of every file it names,
-    both configs, the package version; :mod:`psgsl_pgm._run_key`) differs is refused, naming each differing
+    both configs, the package version; :mod:`psgsl_pgm.runs._key`) differs is refused, naming each differing
     setting, before anything is created; a second process on the same folder is refused
-    (:func:`psgsl_pgm._grid_runner.grid_folder`). Aggregation covers every run stored in ``out/runs``
+    (:func:`psgsl_pgm.runs._runner.grid_folder`). Aggregation covers every run stored in ``out/runs``
     (:func:`write_search_outputs`). Returns the top-level summary.
     """
     config = ExperimentConfig() if config is None else config
@@ -297,7 +297,7 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     world_spec = None if world is None else _world(world, world_digest)  # a bad world file fails here
     _check_sources({g[0] for g in grid}, world_spec)
     key = search_key(config, search, world_part)
-    from .._grid_runner import GridJob, grid_folder, run_grid
+    from ..runs._runner import GridJob, grid_folder, run_grid
 
     def write(run, fh) -> None:
         run.config["key"] = key  # what a later call is checked against

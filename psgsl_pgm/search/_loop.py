@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
-from .._validate import index, positive, real_pair, unit_interval
+from .._shared._validate import index, positive, real_pair, unit_interval
 from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit

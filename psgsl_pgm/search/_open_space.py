@@ -37,8 +37,8 @@ import functools
 import numpy as np
 from scipy.special import k0, xlogy
 
-from .._grid import GridMap
-from .._validate import unit_interval
+from .._shared._validate import unit_interval
+from ..geometry._grid import GridMap
 from ._detection import DetectionModel
 
 __all__ = ["OPEN_SPACE_POLICIES", "OpenSpaceSearch", "grid_size", "hit_probability", "open_space_benchmark"]

@@ -63,7 +63,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import entr
 
-from .._infogain import semantic_information_gain
+from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
 
 __all__ = ["Decision", "POLICIES", "SCORES", "Situation", "check_score", "choose", "olfactory_gain", "score_per_time",

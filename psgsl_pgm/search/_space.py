@@ -20,8 +20,8 @@ import numpy as np
 from scipy import ndimage as ndi
 from scipy.sparse.csgraph import dijkstra
 
-from .._fov import ViewCache
-from .._grid import free_space_graph
+from ..geometry._fov import ViewCache
+from ..geometry._grid import free_space_graph
 
 __all__ = ["FreeSpace"]
 
@@ -48,7 +48,7 @@ class FreeSpace:
     nav : (H, W) bool
         Cells the robot may occupy.
     graph : scipy.sparse.csr_matrix
-        :func:`psgsl_pgm._grid.free_space_graph` of ``nav``: over row-major flat cell indices (edges only
+        :func:`psgsl_pgm.geometry._grid.free_space_graph` of ``nav``: over row-major flat cell indices (edges only
         between ``nav`` cells, no corner cutting), weights in metres.
     headings : (n_headings,) ndarray
     lattice : (H, W) bool

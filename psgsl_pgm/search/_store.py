@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .._grid_runner import atomic_write
-from .._npyfile import READ_ERRORS, load_npy
 from ..experiment._config import source_label
 from ..experiment._store import read_run_key as _read_run_key
+from ..io._npyfile import READ_ERRORS, load_npy
+from ..runs._runner import atomic_write
 from ._loop import SearchRun
 
 __all__ = ["read_run_key", "load_search_run", "save_search_run", "search_run_path", "write_search_run"]
@@ -34,7 +34,7 @@ def write_search_run(run: SearchRun, fh) -> None:
 
 
 def save_search_run(run: SearchRun, path) -> Path:
-    """Write ``run`` to ``path`` atomically (:func:`psgsl_pgm._grid_runner.atomic_write`)."""
+    """Write ``run`` to ``path`` atomically (:func:`psgsl_pgm.runs._runner.atomic_write`)."""
 
     return atomic_write(path, write_search_run, run)
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from .._validate import as_float_array, describe, index, positive, unit_interval
+from .._shared._validate import as_float_array, describe, index, positive, unit_interval
 
 __all__ = ["EXACT_MAX", "bootstrap_mean_ci", "holm", "kaplan_meier", "km_median", "paired_comparison", "rmst",
            "sign_flip_pvalue"]

@@ -19,8 +19,8 @@ Modelling choice: walls block wind, gas, the camera and the robot; furniture is 
 camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`).
 """
 
-from .._grid import GridMap  # the core's grid (psgsl_pgm.GridMap), re-exported for simulator users
-from .._sight import LineOfSightCache, cells_clear  # the core's one line-of-sight rule
+from ..geometry._grid import GridMap  # the core's grid (psgsl_pgm.GridMap), re-exported for simulator users
+from ..geometry._sight import LineOfSightCache, cells_clear  # the core's one line-of-sight rule
 from ._camera import Camera, Frame, take_frame
 from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
@@ -29,8 +29,8 @@ from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._house import House, default_house, segment_mask
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
 from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
-from ._rosmap import load_ros_map, save_ros_map
 from ._roommap import load_room_map, save_room_map
+from ._rosmap import load_ros_map, save_ros_map
 from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow

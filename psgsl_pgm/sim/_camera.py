@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._fov import field_of_view
-from .._validate import positive
+from .._shared._validate import positive
+from ..geometry._fov import field_of_view
 from ._classes import OTHER, match_names
 from ._detector import DetectorModel
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .._grid import GridMap
+from ..geometry._grid import GridMap
 from ._wind import WindField, WindSequence
 
 __all__ = ["read_gaden_wind_csv", "read_gaden_wind_snapshots"]

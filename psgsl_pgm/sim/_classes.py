@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import names as _names
+from .._shared._validate import names as _names
 
 __all__ = ["HOUSE_CLASSES", "HOUSE_ROOMS", "OTHER", "match_names", "reindex"]
 

@@ -12,7 +12,7 @@ and the concentration at a point x is (GADEN's player, with the filament's line 
     C(x) = Σ_f ppm_centre · (σ0 / σ_f)³ · exp(−|x − x_f|² / 2σ_f²)    over filaments with |x − x_f| < 5 σ_f.
 
 Line of sight is between the centres of the query cell and the filament's cell (exact traversal, cached per
-query cell; see :mod:`psgsl_pgm._sight`).
+query cell; see :mod:`psgsl_pgm.geometry._sight`).
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .._shared._validate import positive
+from ..geometry._grid import GridMap
+from ..geometry._sight import LineOfSightCache
 from ._fileio import number, read_yaml_mapping
-from .._grid import GridMap
-from .._validate import positive
-from .._sight import LineOfSightCache
 from ._wind import WindField, WindSequence
 
 __all__ = ["FilamentParams", "FilamentModel", "read_gaden_config"]

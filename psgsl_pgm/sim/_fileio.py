@@ -10,14 +10,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import file_field
-from .._yaml import load_yaml_mapping
+from .._shared._validate import file_field
+from ..io._yaml import load_yaml_mapping
 
 __all__ = ["MAX_IMAGE_PIXELS", "read_yaml_mapping", "number", "number_list", "read_grey_image", "resolve"]
 
 
 def read_yaml_mapping(path) -> tuple[Path, dict]:
-    """Read a YAML file whose top level must be a mapping (the project's safe loader, :mod:`psgsl_pgm._yaml`)."""
+    """Read a YAML file whose top level must be a mapping (the project's safe loader, :mod:`psgsl_pgm.io._yaml`)."""
     return load_yaml_mapping(path)
 
 

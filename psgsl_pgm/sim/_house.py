@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.ndimage as ndi
 
+from .._shared._validate import positive, real_pair
+from ..geometry._grid import GridMap
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER
-from .._grid import GridMap
-from .._validate import positive, real_pair
 from ._objects import SceneObject, box_footprint
 
 __all__ = ["House", "default_house", "segment_mask"]

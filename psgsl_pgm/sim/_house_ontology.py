@@ -7,8 +7,8 @@ from importlib import resources
 
 import numpy as np
 
-from .._ontology import Ontology
-from .._yaml import load_yaml
+from ..core._ontology import Ontology
+from ..io._yaml import load_yaml
 from ._house import default_house
 
 __all__ = ["house_ontology"]

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .._grid import GridMap
-from .._validate import as_float_array, check_keys, real_number, real_pair
+from .._shared._validate import as_float_array, check_keys, real_number, real_pair
+from ..geometry._grid import GridMap
 from ._fileio import number, number_list, read_yaml_mapping
 
 __all__ = ["SceneObject", "box_footprint", "load_objects", "save_objects"]

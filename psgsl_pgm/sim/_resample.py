@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._grid import GridMap, block_mean
+from ..geometry._grid import GridMap, block_mean
 
 __all__ = ["coarsen_factor", "coarsen_labels", "coarsen_occupancy"]
 

@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from .._shared._validate import check_keys
+from ..geometry._grid import GridMap
 from ._fileio import number, read_grey_image, read_yaml_mapping, resolve
-from .._grid import GridMap
-from .._validate import check_keys
 
 __all__ = ["load_room_map", "save_room_map"]
 

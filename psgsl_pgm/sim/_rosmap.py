@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from .._shared._validate import check_keys
+from ..geometry._grid import GridMap
 from ._fileio import number, number_list, read_grey_image, read_yaml_mapping, resolve
-from .._grid import GridMap
-from .._validate import check_keys
 
 __all__ = ["load_ros_map", "save_ros_map"]
 

@@ -9,7 +9,7 @@ in the core.
 
 from __future__ import annotations
 
-from .._class_beliefs import ClassBeliefMap
+from ..core._class_beliefs import ClassBeliefMap
 from ._camera import Frame
 
 __all__ = ["SemanticMap"]

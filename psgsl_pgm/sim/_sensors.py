@@ -7,7 +7,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.signal import lfilter
 
-from .._validate import positive as check_positive
+from .._shared._validate import positive as check_positive
 
 __all__ = ["GasSensor", "GasReading", "Anemometer"]
 

@@ -20,7 +20,7 @@ import scipy.ndimage as ndi
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._grid import GridMap
+from ..geometry._grid import GridMap
 
 __all__ = ["WindField", "WindSequence", "potential_flow", "make_wind"]
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._shared._validate import real_pair
 from ._camera import Camera, Frame, take_frame
 from ._classes import reindex
 from ._detector import DetectorModel
@@ -20,7 +21,6 @@ from ._house import House, default_house
 from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind
-from .._validate import real_pair
 
 __all__ = ["World", "make_world"]
 
@@ -134,7 +134,7 @@ class World:
             return SemanticMap.from_prior(shape, class_prior, classes)
         names = self.house.room_names if room_names is None else tuple(room_names)
         if room_names is not None:  # a misspelt row would leave the house's room at the class prior silently
-            from .._class_maps import unknown_names
+            from ..io._class_maps import unknown_names
             from ._classes import match_names
 
             missing = [n for n, i in zip(names, match_names(names, self.house.room_names)) if i < 0]
@@ -155,7 +155,7 @@ def _source(house: House, source):
     if isinstance(source, str):
         objs = house.objects_of_class(source)
         if not objs:
-            from ._worldfile import _did_you_mean
+            from .._shared._validate import did_you_mean as _did_you_mean
 
             present = sorted({o.class_name for o in house.objects})
             raise ValueError(f"source class {source!r} has no object in the house{_did_you_mean(source, present)}; "

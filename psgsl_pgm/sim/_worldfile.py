@@ -44,12 +44,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .._class_maps import read_class_beliefs
-from .._coco import canonical_class
+from .._shared._validate import check_keys
+from .._shared._validate import did_you_mean as _did_you_mean
+from ..core._ontology import Ontology
+from ..geometry._grid import GridMap
+from ..io._class_maps import read_class_beliefs
+from ..io._coco import canonical_class
 from ._fileio import number, number_list, read_grey_image, read_yaml_mapping, resolve
-from .._grid import GridMap
-from .._ontology import Ontology
-from .._validate import check_keys
 from ._house import House, default_house, segment_mask
 from ._house_ontology import house_ontology
 from ._objects import SceneObject, load_objects
@@ -193,93 +194,6 @@ class WorldSpec:
             kwargs.setdefault("perturbation", self.wind["perturbation"])
         return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
 
-    def findability(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
-                    sources=None) -> dict:
-        """For every source: how far the robot drives to find it, and whether it can at all.
-
-        A source counts as found by the closed loop's own rule, :class:`psgsl_pgm.search.DetectionModel`: when the
-        robot comes within ``found_radius`` of its found region — the emitting object's whole footprint when there
-        is one (:meth:`source_target`), else the centre of the cell holding it. The robot's cells are
-        :class:`psgsl_pgm.search.FreeSpace`'s (free, not furniture or a window, more than ``clearance`` from
-        each), the geodesic distances its free-space graph's.
-
-        Parameters
-        ----------
-        seed : int
-            The house's seed (only the built-in house varies).
-        found_radius : float, optional, keyword-only
-            m; default: the closed loop's, :class:`psgsl_pgm.search.SearchConfig` (0.5 m).
-        clearance : float, optional, keyword-only
-            m; default: the world file's ``clearance`` (0.25 m unless it says otherwise).
-        sources : sequence, optional, keyword-only
-            Source specs (names, classes or positions); default: the world file's ``sources``.
-
-        Returns
-        -------
-        dict
-            Name -> ``{"object": object name or None, "target_cells": int, "gap": m from the nearest drivable
-            cell to what counts as found, "geodesic": m from the start to the nearest drivable cell within
-            found_radius (inf: none is reachable), "findable": bool}``.
-        """
-        from scipy import ndimage as ndi
-
-        from .._validate import positive
-        from ..search._detection import DetectionModel
-        from ..search._loop import SearchConfig
-        from ..search._space import FreeSpace
-        from ._camera import Camera
-
-        defaults = SearchConfig()
-        r = defaults.found_radius if found_radius is None else positive(found_radius, "found_radius", "metres")
-        clearance = self.clearance if clearance is None else positive(clearance, "clearance", "metres")
-        house = self.house(seed)
-        g = house.grid
-        space = FreeSpace(house, Camera(), clearance=clearance)
-        if not space.nav.any():
-            raise ValueError(f"{self.path}: no cell of the map is drivable (free, not furniture or a window, more "
-                             f"than clearance {clearance:g} m from each)")
-        d_start = space.distances(space.snap(self.start_for(house))).reshape(g.shape)
-        out = {}
-        detection = DetectionModel.from_house(house, r)
-        nav_centres = space.centres[space.nav.ravel()]
-        for name in (self.sources if sources is None else sources):
-            xy, obj = self.source_target(name, house)
-            hypothesis = detection.source_cell(xy, obj, house)
-            region = detection.region_mask(hypothesis)
-            dist = ndi.distance_transform_edt(~region) * g.resolution  # centre to the region's centres (exact)
-            gap = float(dist[space.nav].min())
-            near = np.zeros(g.shape, dtype=bool)
-            near[space.nav] = detection.found(nav_centres, hypothesis)  # the closed loop's own rule
-            cells = int(region.sum()) if obj is not None else 0
-            geo = float(d_start[near].min()) if near.any() else float("inf")
-            out[str(name) if isinstance(name, str) else f"{xy[0]:g},{xy[1]:g}"] = {
-                "object": None if obj is None else obj.name, "target_cells": cells, "gap": gap,
-                "geodesic": geo, "findable": bool(np.isfinite(geo))}
-        return out
-
-    def check_findable(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
-                       sources=None) -> dict:
-        """:meth:`findability`, refusing (ValueError naming the source and the gap) a source never found."""
-        from ..search._loop import SearchConfig
-
-        clearance_used = self.clearance if clearance is None else clearance
-        found_radius = SearchConfig().found_radius if found_radius is None else found_radius
-        result = self.findability(seed, found_radius=found_radius, clearance=clearance, sources=sources)
-        for name, f in result.items():
-            if f["findable"]:
-                continue
-            what = f"the footprint of {f['object']!r}" if f["object"] else "it"
-            if f["gap"] > found_radius:
-                raise ValueError(
-                    f"{self.path}: source {name!r} can never be found: the nearest drivable cell is {f['gap']:.2f} m "
-                    f"from {what}, farther than the found radius {found_radius:g} m (a gap of "
-                    f"{f['gap'] - found_radius:.2f} m); raise found_radius (--found-radius) to at least "
-                    f"{f['gap']:.2f} m, lower clearance (--clearance, now {clearance_used:g} m) or move the source")
-            raise ValueError(
-                f"{self.path}: source {name!r} can never be found: the drivable cells within {found_radius:g} m of "
-                f"{what} are not connected to the start (clearance {clearance_used:g} m)")
-        return result
-
     def windows_of(self, house: House) -> tuple:
         """The windows: as declared, or (built-in house) each window mask's extent as a segment."""
         if self.windows or self.fixed_house is not None:
@@ -294,9 +208,10 @@ class WorldSpec:
         return tuple(out)
 
     # --- summary -----------------------------------------------------------------------------------------
-    def summary(self, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None) -> dict:
-        """What ``psgsl world check`` prints: grid, rooms and areas, objects per class, windows, sources (with
-        :meth:`findability` under ``found_radius`` and ``clearance``)."""
+    def summary(self, seed: int = 0) -> dict:
+        """What ``psgsl world check`` prints of the world itself: grid, rooms and areas, objects per class,
+        windows, sources (position, room and emitting object). Whether the robot can find each source is the search's question:
+        :func:`psgsl_pgm.search.findability`."""
         house = self.house(seed)
         g = house.grid
         cell_area = g.resolution ** 2
@@ -310,14 +225,12 @@ class WorldSpec:
         start = self.start_for(house)
         region = self.region_mask(house)
         sources = {}
-        from ..search._loop import SearchConfig
-
-        found = self.findability(seed, found_radius=found_radius, clearance=clearance) if self.sources else {}
         for name in self.sources:
-            xy = self.resolve_source(name, house)
+            xy, obj = self.source_target(name, house)
             room = int(house.room_of(xy))
             sources[name] = {"position": [float(xy[0]), float(xy[1])],
-                             "room": house.room_names[room] if room >= 0 else None} | found[name]
+                             "room": house.room_names[room] if room >= 0 else None,
+                             "object": None if obj is None else obj.name}
         ont = self.ontology
         # rooms without p(o | room) in the ontology start from the class prior (no room evidence)
         no_rooms = [r for r in dict.fromkeys(house.room_names) if not any(_same(r, o) for o in ont.rooms)]
@@ -334,8 +247,6 @@ class WorldSpec:
             | ({"snapshots": len(self.wind["sequence"].snapshots)} if self.wind["kind"] == "gaden" else {}),
             "start": [float(start[0]), float(start[1])],
             "sources": sources,
-            "findability": {"found_radius": SearchConfig().found_radius if found_radius is None else found_radius,
-                            "clearance": self.clearance if clearance is None else clearance},
             "source_region": self.source_region if isinstance(self.source_region, str) else "mask",
             "source_region_area": float(region.sum()) * cell_area,
             "ontology": {"classes": list(ont.classes), "gases": list(ont.gases), "rooms": list(ont.rooms),
@@ -343,14 +254,6 @@ class WorldSpec:
             "gas": self.gas,
             "semantic_map": None if self.class_beliefs is None else list(self.class_beliefs.shape),
         }
-
-
-def _did_you_mean(name: str, known) -> str:
-    """``" — did you mean 'oven'?"`` for the closest of ``known`` (difflib), or ""."""
-    import difflib
-
-    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=2, cutoff=0.6)
-    return f" — did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
 def _same(a: str, b: str) -> bool:
@@ -567,7 +470,7 @@ def _check_rooms(where: str, key: str, rooms, house: House, room_map) -> None:
     """Every room of p(o | room) must be a room of the room map (case and spaces ignored): a misspelt room
     would leave the map's room at the class prior without a word. Rooms of the map the table omits entirely
     start at the class prior (``world check`` warns)."""
-    from .._class_maps import unknown_names
+    from ..io._class_maps import unknown_names
     from ._classes import match_names
 
     missing = [r for r, i in zip(rooms, match_names(rooms, house.room_names)) if i < 0]

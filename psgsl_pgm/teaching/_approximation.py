@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._problem import SemanticGSLProblem
-from .._validate import index as as_index
+from .._shared._validate import index as as_index
+from ..core._problem import SemanticGSLProblem
 
 __all__ = ["approximation_error"]
 

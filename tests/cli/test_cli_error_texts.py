@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 
 
 def _estimate(tmp_path, class_probs, olfactory):

@@ -10,9 +10,9 @@ import sys
 import numpy as np
 import pytest
 
-import psgsl_pgm._cli as cli
+import psgsl_pgm.cli._main as cli
 from psgsl_pgm import kitchen_ontology
-from psgsl_pgm._output import check_output_file, prepare_output_dir, write_file_atomically
+from psgsl_pgm.io._output import check_output_file, prepare_output_dir, write_file_atomically
 
 
 def _error_line(capsys, command):

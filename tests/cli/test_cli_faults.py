@@ -97,7 +97,7 @@ def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_summaries(
     assert any(0 < n < total for n in stored), stored  # some kills did land in the middle of the grid
 
 
-@pytest.mark.slow  # ~25 s; tests/core/test_grid_runner.py checks the lock in-process by default
+@pytest.mark.slow  # ~25 s; tests/runs/test_runs_runner.py checks the lock in-process by default
 def test_a_second_process_on_the_same_out_is_refused_and_a_killed_one_leaves_no_lock(tmp_path):
     out = tmp_path / "s"
     first = _start(SEARCH, out)

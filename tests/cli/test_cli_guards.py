@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-import psgsl_pgm._cli as cli
+import psgsl_pgm.cli._main as cli
 from psgsl_pgm import Ontology, fuse, semantic_source_probability
 
 # Two gases whose sources sit on different classes: which gas is used moves the posterior.
@@ -54,7 +54,7 @@ def test_the_progress_bar_names_the_command(tmp_path, monkeypatch, capsys):
     import pytest
 
     pytest.importorskip("tqdm", reason="the sim extra is not installed (pip install 'psgsl-pgm[sim]')")
-    from psgsl_pgm._grid_runner import GridJob, run_grid
+    from psgsl_pgm.runs._runner import GridJob, run_grid
 
     def command(args):  # a command that runs a grid with its bar on, as experiment/search/demo do
         run_grid([GridJob(tmp_path / "a.txt", _double, (1,))], write=_write,

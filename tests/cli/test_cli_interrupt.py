@@ -1,7 +1,7 @@
 """Ctrl-C during ``psgsl experiment`` (issue 12): stop, keep every finished run, exit 130 with one line, resume.
 
 The signal goes to the whole process group, as a terminal's Ctrl-C does (workers included). Marked slow (a few
-grids of real runs in subprocesses); tests/core/test_grid_runner.py covers the same logic in-process by default.
+grids of real runs in subprocesses); tests/runs/test_runs_runner.py covers the same logic in-process by default.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 
 
 def test_search_grid_writes_summary_csv_figures_and_resumes(tmp_path, capsys):
@@ -67,7 +67,7 @@ def test_bad_option_values_are_refused(capsys, option):
 
 def test_table_of_a_single_run_has_no_interval(tmp_path):
     """One seed (the demo's): the summary's intervals are null and the table says n/a instead of failing."""
-    from psgsl_pgm._cli_search import format_search_table
+    from psgsl_pgm.cli._search import format_search_table
 
     entry = {"success_rate": {"value": 1.0, "ci95": [0.21, 1.0]}, "rmst": {"value": 161.4, "ci95": [None, None]},
              "time_to_find": {"median": None}, "coverage90": {"final": 1.0}, "n_runs": 1}

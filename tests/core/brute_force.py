@@ -152,7 +152,7 @@ def mutual_information(p: Problem, cell: int, *, predictive="exact") -> float:
 
 def touches(a, b, r, c) -> bool:
     """Does the segment between the centres of cells a and b meet the closed square of cell (r, c)?
-    Exact integer geometry in doubled coordinates (independent of the traversal in psgsl_pgm._sight)."""
+    Exact integer geometry in doubled coordinates (independent of the traversal in psgsl_pgm.geometry._sight)."""
     ax, ay, bx, by = 2 * a[1] + 1, 2 * a[0] + 1, 2 * b[1] + 1, 2 * b[0] + 1
     x0, x1, y0, y1 = 2 * c, 2 * c + 2, 2 * r, 2 * r + 2
     if max(ax, bx) < x0 or min(ax, bx) > x1 or max(ay, by) < y0 or min(ay, by) > y1:

@@ -8,9 +8,9 @@ import re
 import numpy as np
 import pytest
 
-import psgsl_pgm._coco as coco
+import psgsl_pgm.io._coco as coco
 from psgsl_pgm import Ontology, semantic_source_probability
-from psgsl_pgm._coco import COCO_ALIASES, COCO_CLASSES, canonical_class
+from psgsl_pgm.io._coco import COCO_ALIASES, COCO_CLASSES, canonical_class
 
 _THREE_GASES = {
     "classes": ["oven", "fridge", "sink"],
@@ -35,7 +35,7 @@ def test_source_likelihood_rows_follow_the_order_asked(asked):
 
 
 def _documented_aliases() -> dict[str, str]:
-    """Alias -> COCO name, read from the table in psgsl_pgm._coco's docstring (the documented contract)."""
+    """Alias -> COCO name, read from the table in psgsl_pgm.io._coco's docstring (the documented contract)."""
     table = {}
     for line in coco.__doc__.splitlines():
         m = re.match(r"^``([^`]+)``\s{2,}(.+)$", line)

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from . import brute_force as bf
-from psgsl_pgm import _infogain, semantic_information_gain
+from psgsl_pgm import semantic_information_gain
+from psgsl_pgm.core import _infogain
 from .test_core_exactness import beliefs
 
 

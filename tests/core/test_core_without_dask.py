@@ -18,7 +18,7 @@ SCRIPT = textwrap.dedent(
     sys.meta_path.insert(0, Block())
     import numpy as np
     from psgsl_pgm import ClassBeliefMap, fuse, semantic_information_gain, semantic_source_probability
-    from psgsl_pgm._grid_runner import GridJob, run_grid
+    from psgsl_pgm.runs._runner import GridJob, run_grid
 
     q = np.array([[0.9, 0.05, 0.025, 0.025], [0.25, 0.25, 0.25, 0.25]])
     lik, prior = [0.4, 0.25, 0.3, 0.05], np.full(4, 0.25)

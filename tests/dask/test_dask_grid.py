@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from .dask_parts import free_port, wait_until, worker_env
 
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.experiment import load_run
 
 GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "pmfs", "--quiet"]
@@ -84,7 +84,7 @@ def test_local_cluster_equals_the_local_pool_bit_for_bit(tmp_path):
 
 
 def test_an_unreachable_scheduler_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
-    import psgsl_pgm._grid_runner as runner
+    import psgsl_pgm.runs._runner as runner
 
     monkeypatch.setattr(runner, "CONNECT_TIMEOUT", 1.0)
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from psgsl_pgm import Ontology, fuse, kitchen_ontology, semantic_source_probability
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.experiment import VARIANTS, mean_ci
 
 

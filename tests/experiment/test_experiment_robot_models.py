@@ -112,7 +112,7 @@ def test_frames_are_read_with_the_robot_detector_model():
     frame = world.camera_frame((2.0, 6.0, 0.0))
     beliefs.observe((2.0, 6.0), world.sense_gas((2.0, 6.0)), world.sense_wind((2.0, 6.0)), [frame])
     reread = robot.likelihood(frame.labels, frame.distance)
-    from psgsl_pgm._class_beliefs import ClassBeliefMap
+    from psgsl_pgm.core._class_beliefs import ClassBeliefMap
     ref = ClassBeliefMap.from_prior(world.house.shape, beliefs.class_prior, world.detector.classes)
     ref._apply(frame.cells, reread, None)
     np.testing.assert_allclose(beliefs.maps["semantics"].probs, ref.probs, rtol=1e-12)

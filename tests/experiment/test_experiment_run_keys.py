@@ -8,7 +8,7 @@ import json
 
 import yaml
 
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.experiment import load_run
 
 from ..core.key_worlds import sha

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from psgsl_pgm import fuse, load_world, semantic_source_probability
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.experiment import VARIANTS, ExperimentConfig, run_search
 from psgsl_pgm.sim import GridMap, SceneObject, box_footprint, save_objects, save_room_map, save_ros_map
 

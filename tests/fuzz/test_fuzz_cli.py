@@ -19,7 +19,7 @@ from hypothesis.extra import numpy as hnp
 
 from hostile import FUZZ, bounded, record
 
-import psgsl_pgm._cli as cli
+import psgsl_pgm.cli._main as cli
 import psgsl_pgm.experiment  # noqa: F401 - imported here, not under the alarm of a timed call
 from psgsl_pgm import kitchen_ontology
 

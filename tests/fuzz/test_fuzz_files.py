@@ -23,7 +23,7 @@ from PIL import Image
 from hostile import FUZZ, HUGE, bounded, record
 
 from psgsl_pgm import Ontology, kitchen_ontology
-from psgsl_pgm._yaml import load_yaml
+from psgsl_pgm.io._yaml import load_yaml
 from psgsl_pgm.experiment import load_run, save_run
 from psgsl_pgm.experiment._run import RunResult
 from psgsl_pgm.sim import (GridMap, load_objects, load_ros_map, load_room_map, read_gaden_config,

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.networks import CANONICAL, canonical_network, draw_network, export, network_evidence
 
 NETWORKS_DIR = Path(__file__).resolve().parents[2] / "networks"

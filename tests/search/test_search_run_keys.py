@@ -9,7 +9,7 @@ import json
 
 import yaml
 
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.search import load_search_run
 
 from ..core.key_worlds import one_byte_edit, sha, write_full_world

@@ -7,7 +7,7 @@ from pathlib import Path
 import yaml
 
 import psgsl_pgm
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 
 HOUSE = Path(psgsl_pgm.__file__).parent / "data" / "worlds" / "house.yaml"
 

@@ -8,6 +8,7 @@ import yaml
 
 from psgsl_pgm import load_world
 from psgsl_pgm.sim import GridMap, SceneObject, box_footprint, save_objects, save_room_map, save_ros_map
+from psgsl_pgm.search import findability
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 
@@ -42,7 +43,8 @@ def test_the_readme_world_file_loads(tmp_path):
     b1 = s["sources"]["B1"]
     assert (b1["position"], b1["room"]) == ([-0.6, 1.95], "Kitchen")
     # B1 lies in the oven's footprint: found within 0.5 m of its 6 x 6 working cells of 0.1 m
-    assert (b1["object"], b1["target_cells"], b1["findable"]) == ("oven_0", 36, True)
+    f = findability(spec)["B1"]
+    assert (b1["object"], f["object"], f["target_cells"], f["findable"]) == ("oven_0", "oven_0", 36, True)
     assert s["sources"]["oven"]["position"] == [-0.6, 1.95]
     assert [w["role"] for w in s["windows"]] == ["inlet", "outlet"]
     assert s["start"] == [-3.0, -3.3]

@@ -53,7 +53,7 @@ def write_real_world(d: Path, **over) -> Path:
 
 
 def test_world_check_on_the_real_house(tmp_path, capsys):
-    from psgsl_pgm._cli import main
+    from psgsl_pgm.cli._main import main
     from psgsl_pgm.sim import load_room_map, load_ros_map
 
     path = write_real_world(tmp_path)
@@ -96,7 +96,7 @@ def test_experiment_on_the_real_house_two_seeds(tmp_path, capsys):
     """`psgsl experiment --world` on the lab's house: 2 seeds from source B1 finish and write their summaries."""
     import json
 
-    from psgsl_pgm._cli import main
+    from psgsl_pgm.cli._main import main
     from psgsl_pgm.experiment import VARIANTS
 
     path = write_real_world(tmp_path)
@@ -116,9 +116,9 @@ def test_a_furniture_map_with_an_oven_at_b1_gives_found_runs(tmp_path, capsys):
     """The lab's `_occupancy.yaml` (furniture drawn): B1 lies in the oven's footprint, which is what counts as
     found — the point B1 itself is 0.52 m from the nearest drivable cell, out of the found radius."""
     from psgsl_pgm import load_world
-    from psgsl_pgm._cli import main
+    from psgsl_pgm.cli._main import main
     from psgsl_pgm.experiment import ExperimentConfig
-    from psgsl_pgm.search import run_closed_loop
+    from psgsl_pgm.search import findability, run_closed_loop
     from psgsl_pgm.search._space import FreeSpace
     from psgsl_pgm.sim import Camera
 
@@ -131,7 +131,7 @@ def test_a_furniture_map_with_an_oven_at_b1_gives_found_runs(tmp_path, capsys):
     nav = FreeSpace(house, Camera(), clearance=0.25).nav
     c = house.grid.cell_centres()[nav]
     assert np.hypot(c[:, 0] + 0.60, c[:, 1] - 1.95).min() == pytest.approx(0.52)  # the point: never within 0.5 m
-    f = spec.findability()["B1"]
+    f = findability(spec)["B1"]
     assert f["object"] == "oven_0" and f["gap"] < 0.5 and f["findable"]
     assert main(["world", "check", str(path)]) == 0
     assert "source B1: (-0.60, 1.95) in Kitchen, object oven_0" in capsys.readouterr().out
@@ -144,7 +144,7 @@ def test_a_furniture_map_with_an_oven_at_b1_gives_found_runs(tmp_path, capsys):
 
 def test_typos_in_the_labs_files_are_refused(tmp_path, capsys):
     """The lab's own files with one typo each: world check refuses them in one line, naming the close name."""
-    from psgsl_pgm._cli import main
+    from psgsl_pgm.cli._main import main
 
     rooms = (SHARED / "ObjectProbByRoom.yaml").read_text().replace("  Kitchen:", "  Kitchn:")
     (tmp_path / "rooms_typo.yaml").write_text(rooms)

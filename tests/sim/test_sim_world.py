@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import psgsl_pgm
-import psgsl_pgm._sight
+import psgsl_pgm.geometry._sight
 import psgsl_pgm.sim as sim
 from psgsl_pgm import Ontology
 from psgsl_pgm.sim import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, GasSensor, make_world
@@ -80,4 +80,4 @@ def test_public_names():
             assert obj.__module__.startswith("psgsl_pgm."), (name, obj.__module__)
         else:  # the constants: class and room names, confusion groups
             assert isinstance(obj, (str, tuple)) and obj, (name, obj)
-    assert sim.GridMap is psgsl_pgm.GridMap and sim.cells_clear is psgsl_pgm._sight.cells_clear
+    assert sim.GridMap is psgsl_pgm.GridMap and sim.cells_clear is psgsl_pgm.geometry._sight.cells_clear

@@ -10,7 +10,7 @@ import pytest  # noqa: E402
 import yaml  # noqa: E402
 
 from psgsl_pgm import load_world  # noqa: E402
-from psgsl_pgm._cli_world import plot_world  # noqa: E402
+from psgsl_pgm.cli._world import plot_world  # noqa: E402
 from psgsl_pgm.sim import potential_flow, save_ros_map  # noqa: E402
 from psgsl_pgm.sim._plot import declutter  # noqa: E402
 

@@ -5,7 +5,7 @@ import pytest
 import yaml
 
 from psgsl_pgm import load_world
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.sim import make_world
 
 from .test_sim_worldfile import world_dict, write_house

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from psgsl_pgm import load_world
-from psgsl_pgm._cli import main
+from psgsl_pgm.cli._main import main
 from psgsl_pgm.sim import (GridMap, SceneObject, box_footprint, default_house, default_world, read_gaden_wind_csv,
                            read_gaden_wind_snapshots, save_objects, save_room_map, save_ros_map)
 from psgsl_pgm.sim._resample import coarsen_labels, coarsen_occupancy
@@ -236,7 +236,7 @@ def test_world_check_refuses_an_unwritable_png_before_work(flat, capsys):
 def test_the_world_figure_is_readable(flat):
     import matplotlib.pyplot as plt
 
-    from psgsl_pgm._cli_world import plot_world
+    from psgsl_pgm.cli._world import plot_world
     from psgsl_pgm.sim import figure_problems
 
     for spec in (load_world(flat / "world.yaml"), default_world()):

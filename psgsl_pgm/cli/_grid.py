@@ -1,0 +1,111 @@
+"""Command-line side of the grid runner (:mod:`psgsl_pgm.runs._runner`): ``--scheduler``, the Ctrl-C line, and the
+argument types of counts and budgets (``--seeds``, ``--workers``, ... with their size guards).
+
+Used by ``psgsl experiment`` and ``psgsl search``::
+
+    add_scheduler_argument(parser)                      # --scheduler {local, tcp://HOST:PORT}
+    try:
+        run_experiment(..., scheduler=args.scheduler)
+    except GridInterrupted as exc:
+        return interrupted(args, exc, where=out / "runs")  # one line on stderr, exit code 130
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+
+__all__ = ["EXIT_INTERRUPTED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "interrupted", "positive_float",
+           "positive_int", "seed_count", "seed_range", "worker_count"]
+
+#: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
+EXIT_INTERRUPTED = 130
+
+#: Size guards of the command line: more seeds than this is years of runs, more workers than this no machine has.
+MAX_SEEDS = 10_000
+MAX_WORKERS = 1024
+
+
+def positive_int(text, maximum=None):
+    """argparse type: an integer >= 1 (and <= ``maximum``)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    if maximum is not None and value > maximum:
+        raise argparse.ArgumentTypeError(f"expected a positive integer of at most {maximum}, got {text!r}")
+    return value
+
+
+def positive_float(text):
+    """argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def seed_count(text):
+    """argparse type of ``--seeds``: 1 to :data:`MAX_SEEDS`."""
+    return positive_int(text, MAX_SEEDS)
+
+
+def seed_range(first, count: int) -> range:
+    """The seeds of ``--first-seed N --seeds S``: N, …, N + S − 1.
+
+    ``first`` is the option's text (or an int); anything but an integer >= 0 is a :class:`ValueError` naming
+    ``--first-seed`` (the command reports it in one line, exit code 2, before any output). Seeds are stored as
+    int64, so the last one must stay below 2**63.
+    """
+    text = str(first).strip()
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise ValueError(f"--first-seed must be an integer >= 0, got {str(first)!r}") from None
+    if value < 0:
+        raise ValueError(f"--first-seed must be an integer >= 0, got {str(first)!r}")
+    if value + count - 1 >= 2**63:
+        raise ValueError(f"--first-seed + --seeds - 1 must be below 2**63 (seeds are stored as int64), got "
+                         f"{str(first)!r} and {count}")
+    return range(value, value + count)
+
+
+def add_found_arguments(parser) -> None:
+    """``--found-radius`` and ``--clearance`` (m), shared by ``psgsl search`` and ``psgsl world check``: what
+    counts as found and which cells are drivable (None: the closed loop's and the world file's defaults)."""
+    parser.add_argument("--found-radius", type=positive_float, default=None, metavar="M",
+                        help="a source counts as found within this distance of it (of its object's footprint), m "
+                        "(default: the closed loop's, 0.5)")
+    parser.add_argument("--clearance", type=positive_float, default=None, metavar="M",
+                        help="the robot's distance from walls, furniture and windows: which cells are drivable, m "
+                        "(default: the world file's 'clearance', else 0.25)")
+
+
+def worker_count(text):
+    """argparse type of ``--workers``: 1 to :data:`MAX_WORKERS`."""
+    return positive_int(text, MAX_WORKERS)
+
+
+def add_scheduler_argument(parser) -> None:
+    """Add ``--scheduler`` (default: the local process pool of ``--workers`` processes)."""
+    parser.add_argument(
+        "--scheduler", default=None, metavar="ADDRESS",
+        help="run on dask.distributed (extra psgsl-pgm[dask]): 'local' = a LocalCluster of --workers processes, "
+             "or the address of a running 'dask scheduler' (e.g. tcp://127.0.0.1:8786); default: a local pool",
+    )
+
+
+def interrupted(args, exc, *, where) -> int:
+    """Print the one-line Ctrl-C report (runs done, where, how to resume) on stderr; return 130."""
+    argv = getattr(args, "argv", None)
+    again = shlex.join(["psgsl", *argv]) if argv else f"psgsl {args.command} with the same arguments"
+    how = "in-progress runs abandoned" if exc.immediate else "runs in progress were finished"
+    print(f"psgsl {args.command}: interrupted: {exc.done} of {exc.total} runs done in {where} ({how}); "
+          f"resume with: {again}", file=sys.stderr, flush=True)
+    return EXIT_INTERRUPTED

@@ -1,0 +1,171 @@
+"""``psgsl search``: the closed-loop grid in the simulated house, or (``--open-space``) the open-space benchmark."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from ._grid import (
+    MAX_SEEDS,
+    MAX_WORKERS,
+    add_found_arguments,
+    add_scheduler_argument,
+    interrupted,
+    positive_float,
+    positive_int,
+    seed_count,
+    seed_range,
+    worker_count,
+)
+
+__all__ = ["add_parser", "run"]
+
+_SETTINGS = ((1.0, 1.0), (2.0, 2.0), (3.0, 1.0))
+_DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
+
+
+def add_parser(subparsers):
+    """Register ``psgsl search``."""
+    from ..experiment import ESTIMATORS, VARIANTS
+    from ..search import OPEN_SPACE_POLICIES, POLICIES, SCORES
+
+    workers = min(2, os.cpu_count() or 1)
+    p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
+                              "or --open-space: the Loisy & Eloy benchmark")
+    p.add_argument("--world", default=None, help="world file: your own house (see README 'Your own house'); "
+                   "default: the embedded house")
+    p.add_argument("--sources", nargs="+", default=None,
+                   help="object class names, 'x,y' positions or the world file's source names (default: the "
+                   "world's sources; for the embedded house oven bed 5.0,6.0)")
+    p.add_argument("--policies", nargs="+", choices=POLICIES, default=["tour", "infotaxis", "space-aware-infotaxis"],
+                   help="policies (default: %(default)s)")
+    p.add_argument("--variants", nargs="+", choices=VARIANTS, default=["olfaction", "semantics+rooms"],
+                   help="information variants (default: %(default)s)")
+    p.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis"],
+                   help="olfactory estimators (default: %(default)s)")
+    p.add_argument("--seeds", type=seed_count, default=10,
+                   help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
+    p.add_argument("--first-seed", default="0", metavar="N",
+                   help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
+    p.add_argument("--budget", type=positive_float, default=1000.0,
+                   help="time budget per run, s of simulated time (default: %(default)s)")
+    p.add_argument("--score", choices=SCORES, default="per-time",
+                   help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
+                   "(default: %(default)s)")
+    add_found_arguments(p)
+    p.add_argument("--workers", type=worker_count, default=workers,
+                   help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_scheduler_argument(p)
+    p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--open-space", action="store_true",
+                   help="run the open-space benchmark instead (writes OUT/open_space.json)")
+    p.add_argument("--open-policies", nargs="+", choices=OPEN_SPACE_POLICIES,
+                   default=["infotaxis", "space-aware-infotaxis"], help="open-space policies (default: %(default)s)")
+    p.add_argument("--episodes", type=positive_int, default=1000,
+                   help="open-space episodes per policy and setting (default: %(default)s)")
+    p.add_argument("--setting", nargs=2, type=positive_float, action="append", metavar=("LAMBDA_OVER_DX", "R_DT"),
+                   help="open-space setting (repeatable; default: (1, 1), (2, 2), (3, 1))")
+    p.set_defaults(func=run)
+    return p
+
+
+def _open_space(args) -> int:
+    from ..search import open_space_benchmark
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for lam, r in args.setting or _SETTINGS:
+        for pol in args.open_policies:
+            res = open_space_benchmark(pol, lambda_over_dx=lam, r_dt=r, episodes=args.episodes, seed=0)
+            res = {k: (v.tolist() if hasattr(v, "tolist") else v) for k, v in res.items()}
+            rows.append(res)
+            print(f"{pol:>22}  λ/Δx = {lam:g}, R·Δt = {r:g}, N = {res['n']}: mean T = {res['mean_steps']:.2f} "
+                  f"± {res['sem']:.2f} (s.e., {res['episodes']} episodes), median {res['median']:g}, "
+                  f"P(not found) = {res['p_not_found']:.3g}", flush=True)
+    path = out / "open_space.json"
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    print(f"written to {path}")
+    return 0
+
+
+def _num(value, fmt: str) -> str:
+    """A number in ``fmt``, or "n/a" where there is none (e.g. no interval from a single run)."""
+    return "n/a" if value is None else format(value, fmt)
+
+
+def format_search_table(summary: dict) -> str:
+    """One line per ``"<policy>/<variant>"``: success rate [Wilson 95 %], RMST [95 % CI], Kaplan–Meier median,
+    final coverage of the 90 % region, runs."""
+    lines = [f"{'policy/variant':<36} {'success [95% CI]':>22} {'RMST, s [95% CI]':>24} {'median':>7} "
+             f"{'cov90':>6} {'n':>3}"]
+    for key, s in summary.items():
+        sr, r = s["success_rate"], s["rmst"]
+        lo, hi = r["ci95"]
+        lines.append(f"{key:<36} {sr['value']:6.2f} [{sr['ci95'][0]:.2f}, {sr['ci95'][1]:.2f}]      "
+                     f"{r['value']:7.1f} [{_num(lo, '6.1f')}, {_num(hi, '6.1f')}] "
+                     f"{_num(s['time_to_find']['median'], '7.1f'):>7} {s['coverage90']['final']:6.2f} "
+                     f"{s['n_runs']:3d}")
+    lines.append("(RMST: restricted mean time to find within the budget, Kaplan-Meier, Greenwood 95 % CI; median: "
+                 "Kaplan-Meier, n/a when not reached; cov90: runs whose 90 % region holds the source at the end)")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """Run ``psgsl search``; returns the exit code (bad input: one line on stderr, exit 2)."""
+    from ._usage import UsageError as _UsageError
+
+    try:
+        return _run(args)
+    except (ValueError, TypeError) as exc:  # the library's messages name what was expected and what arrived
+        raise _UsageError(str(exc)) from None
+
+
+def _run(args) -> int:
+    if args.open_space:
+        return _open_space(args)
+    from ..experiment import ExperimentConfig, parse_source
+    from ..runs._runner import GridInterrupted
+    from ..search import SearchConfig
+    from ..search._grid import run_search_grid
+
+    seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
+    spec = None
+    if args.world is not None:
+        from ..sim import load_world
+
+        spec = load_world(args.world)  # a bad world file: ValueError -> one line, exit 2, nothing written
+    names = args.sources
+    if names is None:
+        names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
+        if not names:
+            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+    sources = [parse_source(s) for s in names]  # ValueError -> one line, exit 2
+    config = ExperimentConfig(gas=spec.gas) if spec is not None and spec.gas else ExperimentConfig()
+    clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
+    geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}
+    from ..search import check_findable
+    from ..sim import default_world
+
+    # a source the robot can never find is refused before any run (in the first seed's house)
+    check_findable(spec if spec is not None else default_world(), seeds[0], sources=sources, **geometry)
+    try:
+        search = SearchConfig(time_budget=args.budget, score=args.score, **geometry)
+        summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, seeds,
+                                    out=args.out, workers=args.workers, search=search, config=config,
+                                    progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler,
+                                    world=args.world)
+    except GridInterrupted as exc:
+        return interrupted(args, exc, where=Path(args.out) / "runs")
+    for key, summary in summaries.items():
+        print(f"source/estimator {key}")
+        print(format_search_table(summary))
+        print()
+    print(f"written to {args.out}: summary.json, runs.csv, one folder per source and estimator (summary.json, "
+          "paired.json when runs are paired, runs.csv, survival.png, paths.png), runs/")
+    return 0
