@@ -153,7 +153,7 @@ def _load_array(path, name):
 def _estimate(args) -> int:
     import numpy as np
 
-    from .. import Ontology, fuse, semantic_source_probability
+    from ..core import Ontology, fuse, semantic_source_probability
     from .._shared._validate import as_float_array, check_distribution, check_nonnegative, check_sums
     from ..io._output import check_output_file, write_file_atomically
 
