@@ -107,6 +107,11 @@ class EpisodeRecorder:
         self.best_class.append(np.argmax(cells, axis=-1).astype(np.uint8))
         self.chosen.append(np.full(3, np.nan) if chosen is None else np.asarray(chosen, dtype=np.float64))
 
+    def choose(self, pose) -> None:
+        """The pose (x, y, heading) chosen after the last step (the closed loop's decision)."""
+        if self.chosen:
+            self.chosen[-1] = np.asarray(pose, dtype=np.float64)
+
     def episode(self, *, variants, meta: dict):
         """The log as a :class:`psgsl_pgm.ros.Episode` (times from the run's start)."""
         from ..ros import Episode

@@ -174,7 +174,10 @@ def step_metrics(post, centres, truth, truth_cell, cell_area):
     """Per-variant metrics of posteriors ``post`` (V, H, W): error and spread (:func:`error_and_spread`), and the
     calibration of the declared 90 % region — whether it holds ``truth_cell`` (flat index; None: no known source,
     False), its area (m², ``cell_area`` per cell) and the HPD level of ``truth_cell`` (NaN without one)."""
-    err, spr = error_and_spread(post, centres, truth)
+    known = truth_cell is not None
+    err, spr = error_and_spread(post, centres, truth if known else centres[0, 0])  # the spread needs no source
+    if not known:
+        err = np.full_like(err, np.nan)
     hit, area, level = np.zeros(len(post), bool), np.empty(len(post)), np.full(len(post), np.nan)
     for v in range(len(post)):
         region = credible_region(post[v], 0.9)

@@ -159,7 +159,7 @@ def bag_topics(path) -> list:
     """``[(topic, message type, message count, role or None)]`` of a bag, with the role each would fill."""
     folder, reader = _open(path)
     try:
-        chosen = _choose(folder, reader.connections, {})
+        chosen = _choose(folder, reader.connections, {}, strict=False)
         rows = []
         for c in sorted(reader.connections, key=lambda c: c.topic):
             role = next((r for r, t in chosen.items() if t == c.topic), None)
@@ -169,8 +169,9 @@ def bag_topics(path) -> list:
         reader.close()
 
 
-def _choose(folder, connections, topics: dict) -> dict:
-    """Role -> topic: the named ones (checked), the others by type preference; ValueError when ambiguous."""
+def _choose(folder, connections, topics: dict, *, strict: bool = True) -> dict:
+    """Role -> topic: the named ones (checked), the others by type preference; ValueError when ambiguous or a
+    required role has no topic (``strict=False``: None for such a role, for listing)."""
     by_topic = {}
     for c in connections:
         by_topic.setdefault(c.topic, c.msgtype)
@@ -196,9 +197,11 @@ def _choose(folder, connections, topics: dict) -> dict:
                 found = cands[0]
                 break
             if len(cands) > 1:
+                if not strict:
+                    break
                 raise ValueError(f"{folder}: several {role} topics of type {typ}: {cands}; choose one with "
                                  f"--topics {role}=TOPIC")
-        if found is None and role in _REQUIRED:
+        if found is None and role in _REQUIRED and strict:
             raise ValueError(f"{folder}: no {role} topic (a topic of type {' or '.join(types)}); the bag has "
                              f"{sorted(f'{t} [{m}]' for t, m in by_topic.items())}; name one with --topics {role}=TOPIC")
         out[role] = found

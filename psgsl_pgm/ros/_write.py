@@ -47,15 +47,17 @@ def replace_folder(path, write) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tag = uuid.uuid4().hex[:8]
-    tmp = path.with_name(f".{path.name}.{tag}.part")
+    work = path.with_name(f".{path.name}.{tag}.part")  # a hidden folder beside the target
     old = path.with_name(f".{path.name}.{tag}.old")
     try:
+        work.mkdir()
+        tmp = work / path.name  # the folder keeps its final name inside (rosbags names its files after it)
         write(tmp)
         if path.exists():
             os.replace(path, old)
         os.replace(tmp, path)
     finally:
-        for leftover in (tmp, old):
+        for leftover in (work, old):
             if leftover.exists():
                 shutil.rmtree(leftover, ignore_errors=True)
     return path
