@@ -1,0 +1,107 @@
+"""Bad bags: one ValueError naming the bag, the topic and the time; nothing is guessed or extrapolated."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
+
+from psgsl_pgm.ros import bag_topics, read_bag  # noqa: E402
+
+from .bags import episode_bag, rewrite  # noqa: E402
+
+
+def _storage_file(bag, suffix):
+    (f,) = [p for p in bag.iterdir() if p.suffix == suffix]
+    return f
+
+
+@pytest.mark.parametrize("storage, suffix", [("mcap", ".mcap"), ("sqlite3", ".db3")])
+def test_truncated_bag(tmp_path, storage, suffix):
+    bag = episode_bag(tmp_path / "bag", storage)
+    f = _storage_file(bag, suffix)
+    data = f.read_bytes()
+    f.write_bytes(data[: len(data) // 2])
+    with pytest.raises(ValueError, match=re.escape(str(bag))):
+        read_bag(bag)
+
+
+def test_corrupt_sqlite3_bag(tmp_path):
+    bag = episode_bag(tmp_path / "bag", "sqlite3")
+    f = _storage_file(bag, ".db3")
+    data = bytearray(f.read_bytes())
+    data[:100] = b"\xff" * 100  # the sqlite header
+    f.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=r"bag: not a readable ROS 2 bag"):
+        read_bag(bag)
+
+
+def test_not_a_bag(tmp_path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match="empty: not a readable ROS 2 bag"):
+        read_bag(tmp_path / "empty")
+    with pytest.raises(FileNotFoundError):
+        read_bag(tmp_path / "nothing-here")
+
+
+def test_missing_topic_and_wrong_type(tmp_path):
+    bag = episode_bag(tmp_path / "bag")
+    with pytest.raises(ValueError, match=r"topic /PID/gas \(given for gas\) is not in the bag; its topics: "):
+        read_bag(bag, topics={"gas": "/PID/gas"})
+    with pytest.raises(ValueError, match=r"topic /wind has type geometry_msgs/msg/Vector3Stamped, but gas needs"):
+        read_bag(bag, topics={"gas": "/wind"})
+    with pytest.raises(ValueError, match=r"unknown role\(s\) \['smell'\]"):
+        read_bag(bag, topics={"smell": "/gas"})
+    # no gas topic at all: named with what the bag has
+    nogas = rewrite(bag, tmp_path / "nogas", keep=lambda topic, t, m: topic != "/gas")
+    with pytest.raises(ValueError, match=r"nogas: no gas topic \(a topic of type olfaction_msgs/msg/GasSensor or"):
+        read_bag(nogas)
+    assert ("/tf", "tf2_msgs/msg/TFMessage", 10, "pose") in bag_topics(nogas)  # listing still works
+
+
+def test_unknown_message_type(tmp_path):
+    """A gas topic of a type neither rosbags, nor this package, nor the bag defines."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    store.register(get_types_from_msg("float64 ppm\n", "acme_msgs/msg/Smell"))
+    with Writer(tmp_path / "acme", version=8) as w:  # version 8: no message definitions stored
+        c = w.add_connection("/smell", "acme_msgs/msg/Smell", typestore=store)
+        w.write(c, 1, store.serialize_cdr(store.types["acme_msgs/msg/Smell"](ppm=1.0), "acme_msgs/msg/Smell"))
+    with pytest.raises(ValueError, match=r"acme: no pose topic .*'/smell \[acme_msgs/msg/Smell\]'"):
+        read_bag(tmp_path / "acme")
+
+
+def test_pose_that_never_covers_a_reading(tmp_path):
+    bag = episode_bag(tmp_path / "bag")
+    start = 1_700_000_000 * 10**9
+    cut = rewrite(bag, tmp_path / "cut", keep=lambda topic, t, m: topic != "/tf" or t < start + 6 * 10**9)
+    with pytest.raises(ValueError, match=r"cut: topic /tf \(map -> base_link\): no sample within the tolerance 0.5 s "
+                                         r"on both sides of t = 6.000 s into the bag"):
+        read_bag(cut)
+    # a gap: samples 2 s apart around a reading are beyond a 0.5 s tolerance, within a 1.5 s one
+    gap = rewrite(bag, tmp_path / "gap", keep=lambda topic, t, m: topic != "/tf" or t != start + 3 * 10**9)
+    with pytest.raises(ValueError, match=r"gap: topic /tf .* t = 3.000 s into the bag .*1.000 s before and 1.000 s"):
+        read_bag(gap)
+    data = read_bag(gap, tolerance=1.5)
+    np.testing.assert_allclose(data.gas_xy[3], (1.05 + 0.75, 6.05), rtol=0, atol=1e-12)  # linear in between
+
+
+def test_times_going_backwards(tmp_path):
+    bag = episode_bag(tmp_path / "bag")
+    start = 1_700_000_000 * 10**9
+
+    def swap(topic, t, msg):
+        if topic == "/gas" and t == start + 5 * 10**9:  # stamped before the reading before it
+            stamp = dataclasses.replace(msg.header.stamp, sec=msg.header.stamp.sec - 2)
+            return dataclasses.replace(msg, header=dataclasses.replace(msg.header, stamp=stamp))
+        return msg
+
+    back = rewrite(bag, tmp_path / "back", change=swap)
+    with pytest.raises(ValueError, match=r"back: topic /gas: time goes backwards at t = 3.000 s into the bag"):
+        read_bag(back)
