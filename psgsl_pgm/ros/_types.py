@@ -6,7 +6,7 @@ rosbags brings the standard ROS 2 (Humble) types — ``tf2_msgs/msg/TFMessage``,
 * ``olfaction_msgs/msg/GasSensor`` and ``olfaction_msgs/msg/Anemometer``: the message types of MAPIRlab's GSL
   stack (GADEN's simulated sensors, GasSourceLocalization), package ``MAPIRlab/olfaction_msgs``, files
   ``msg/GasSensor.msg`` and ``msg/Anemometer.msg``, licensed GPLv3 (psgsl-pgm is GPL-3.0-or-later). The field
-  definitions below are those files' (constants and comments shortened to what a reader needs).
+  definitions below are those files' fields and constants (comments left out).
 * ``vision_msgs/msg/Detection3DArray`` and the types it is built from (``ros-perception/vision_msgs`` 4.x,
   the ROS 2 Humble release; Apache-2.0).
 
@@ -40,6 +40,21 @@ uint8 TECH_TDLAS=53
 uint8 TECH_TEMP=100
 uint8 TECH_HUMIDITY=101
 uint8 TECH_NOT_VALID=255
+uint8 MANU_UNKNOWN=0
+uint8 MANU_FIGARO=1
+uint8 MANU_ALPHASENSE=2
+uint8 MANU_SGX=3
+uint8 MANU_RAE=50
+uint8 MANU_HANWEI=51
+uint8 MANU_NOT_VALID=255
+uint8 MPN_UNKNOWN=0
+uint8 MPN_TGS2620=50
+uint8 MPN_TGS2600=51
+uint8 MPN_TGS2611=52
+uint8 MPN_TGS2610=53
+uint8 MPN_TGS2612=54
+uint8 MPN_MINIRAELITE=70
+uint8 MPN_NOT_VALID=255
 uint8 UNITS_UNKNOWN=0
 uint8 UNITS_VOLT=1
 uint8 UNITS_AMP=2
