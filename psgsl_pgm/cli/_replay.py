@@ -57,6 +57,8 @@ def add_parser(subparsers):
     p.add_argument("--threshold", type=float, default=None, metavar="PPM",
                    help="gas hit threshold, a hit when reading >= PPM (default: a psgsl-recorded bag's, else the "
                    "sensor model's 1 ppm)")
+    p.add_argument("--bag-map", action="store_true", help="use the bag's nav_msgs/OccupancyGrid as the house (no "
+                   "rooms or objects; a source may be in any free cell) instead of the world's map")
     p.add_argument("--out", default=None, help="output directory (required unless --list)")
     p.set_defaults(func=run)
     return p
@@ -80,7 +82,7 @@ def run(args) -> int:
     check_output_dir(args.out)  # an unwritable --out fails now, before the bag is read; creates nothing
     res = replay(args.bag, world=args.world, source=args.source, estimator=args.estimator, seed=args.seed,
                  topics=dict(args.topics), map_frame=args.map_frame, robot_frame=args.robot_frame,
-                 tolerance=args.tolerance, threshold=args.threshold)
+                 tolerance=args.tolerance, threshold=args.threshold, bag_map=args.bag_map)
     run_ = res.run
     print(f"psgsl replay: {args.bag}: {run_.n_steps} gas readings ({int(run_.hit.sum())} hits at >= "
           f"{run_.config['threshold']:g} ppm), {res.n_frames} detection frames"

@@ -22,13 +22,13 @@ Unlike the closed loop, a replay applies no "not found here" update: it estimate
 
 from __future__ import annotations
 
-from dataclasses import replace
+import dataclasses
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
-from ..sim import Camera, DetectorModel, GasSensor, default_world, load_world, match_names
+from ..sim import Camera, DetectorModel, GasSensor, House, default_world, load_world, match_names
 from ..sim._camera import Frame
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._run import RunResult, run_config, step_metrics
@@ -116,8 +116,8 @@ def replay_steps(bag, frames, *, threshold: float, tolerance: float):
 
 def replay(bag, *, world=None, source=None, estimator: str | None = None, config: ExperimentConfig | None = None,
            seed: int | None = None, topics=None, map_frame: str = "map", robot_frame: str = "base_link",
-           tolerance: float | None = None, threshold: float | None = None, keep_posteriors: bool = False
-           ) -> ReplayResult:
+           tolerance: float | None = None, threshold: float | None = None, bag_map: bool = False,
+           keep_posteriors: bool = False) -> ReplayResult:
     """Replay a ROS 2 bag through the estimators (see the module docstring).
 
     Parameters
@@ -143,6 +143,11 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         Seconds; see :mod:`psgsl_pgm.ros._time` (default :data:`psgsl_pgm.ros.DEFAULT_TOLERANCE`).
     threshold : float, optional, keyword-only
         Gas hit threshold, ppm (default: the recorded episode's, else the sensor model's, 1 ppm).
+    bag_map : bool, keyword-only
+        Use the bag's ``nav_msgs/msg/OccupancyGrid`` as the house (occupied: ≥ 50 or unknown) instead of the world
+        file's map: no rooms, no objects, no windows, so the room variant starts from the class prior, the source
+        may be in any free cell, and the wind estimate uses uniform flows along x and y. The world still gives the
+        ontology and the gas.
     keep_posteriors : bool, keyword-only
         Keep every step's posteriors (float64) in the result.
 
@@ -170,6 +175,14 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         threshold = float(meta.get("threshold", GasSensor().threshold))
     if not (np.isfinite(threshold) and threshold > 0):
         raise ValueError(f"threshold must be a positive number of ppm, got {threshold!r}")
+    if bag_map:
+        if data.grid is None:
+            raise ValueError(f"{data.path}: the bag has no nav_msgs/msg/OccupancyGrid topic to use as the map")
+        grid = data.grid
+        empty = np.zeros(grid.shape, dtype=bool)
+        house = House(grid, np.full(grid.shape, -1, dtype=np.int64), (), (), empty, empty)
+        setting = dataclasses.replace(setting, fixed_house=house, source_region="free", class_beliefs=None,
+                                      start=None, sources={})
     house = setting.house(int(seed))
     if source is None and meta.get("source") is not None:
         source = meta["source"]

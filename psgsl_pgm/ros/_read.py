@@ -448,7 +448,9 @@ def _grid(msg) -> GridMap:
         raise ValueError(f"the OccupancyGrid's origin is rotated (yaw {_yaw(q):.3g} rad); only axis-aligned maps are read")
     data = np.asarray(msg.data, dtype=np.int16).reshape(int(info.height), int(info.width))
     occ = (data >= 50) | (data < 0)
-    return GridMap(occ, float(info.resolution), (float(info.origin.position.x), float(info.origin.position.y)))
+    # the resolution is a float32 field: its shortest decimal (0.05, not 0.0500000007) is what the map meant
+    res = float(np.format_float_positional(np.float32(info.resolution), unique=True))
+    return GridMap(occ, res, (float(info.origin.position.x), float(info.origin.position.y)))
 
 
 def _detections(name, topic, msgs, tree, frame_of, map_frame, robot_frame, describe) -> list:

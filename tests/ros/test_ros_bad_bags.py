@@ -105,3 +105,21 @@ def test_times_going_backwards(tmp_path):
     back = rewrite(bag, tmp_path / "back", change=swap)
     with pytest.raises(ValueError, match=r"back: topic /gas: time goes backwards at t = 3.000 s into the bag"):
         read_bag(back)
+
+
+def test_bag_map_replaces_the_house(tmp_path):
+    """--bag-map: the bag's OccupancyGrid is the house (no rooms: the prior is uniform on its free cells)."""
+    from psgsl_pgm.experiment._replay import replay
+    from psgsl_pgm.sim import default_house
+
+    bag = episode_bag(tmp_path / "bag")
+    res = replay(bag, bag_map=True, keep_posteriors=True)
+    grid = default_house(0).grid
+    np.testing.assert_array_equal(res.house.grid.occupancy, grid.occupancy)
+    assert res.house.grid.resolution == grid.resolution and res.house.room_names == ()
+    prior = res.posteriors[0][0]  # p(s) before any reading: uniform on the free cells
+    np.testing.assert_allclose(prior[grid.free], 1.0 / grid.free.sum(), rtol=1e-12)
+    assert (prior[~grid.free] == 0).all()
+    nomap = rewrite(bag, tmp_path / "nomap", keep=lambda topic, t, m: topic != "/map")
+    with pytest.raises(ValueError, match="nomap: the bag has no nav_msgs/msg/OccupancyGrid topic"):
+        replay(nomap, bag_map=True)
