@@ -126,7 +126,9 @@ class EpisodeRecorder:
             wind=np.array(self.wind).reshape(-1, 2), frame_t=np.array(self.frame_t) - t0,
             frame_cells=self.frame_cells, frame_labels=self.frame_labels, objects=objects,
             classes=tuple(world.detector.classes), variants=tuple(variants), step_t=np.array(self.step_t) - t0,
-            posteriors=np.stack(self.posteriors), best_class=np.stack(self.best_class), chosen=np.stack(self.chosen),
+            posteriors=np.stack(self.posteriors) if self.posteriors else None,
+            best_class=np.stack(self.best_class) if self.best_class else None,
+            chosen=np.stack(self.chosen) if self.chosen else None,
             threshold=float(world.gas_sensor.threshold), meta=meta)
 
     def write(self, stem, *, variants, meta: dict) -> tuple:
