@@ -313,9 +313,10 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
         chosen = _choose(name, reader.connections, topics)
         store = typestore(reader.connections)
         wanted = {t for t in chosen.values() if t is not None}
-        pose_topic = chosen["pose"]
-        if pose_topic == "/tf" or any(c.topic == "/tf" for c in reader.connections):
-            wanted.add("/tf")
+        tf_topics = {c.topic for c in reader.connections if c.msgtype == TF and c.topic in ("/tf", "/tf_static")}
+        if any(c.topic == chosen["pose"] and c.msgtype == TF for c in reader.connections):
+            tf_topics.add(chosen["pose"])  # a namespaced transform topic named with --topics pose=/robot1/tf
+        wanted |= tf_topics
         if any(c.topic == "/tf_static" for c in reader.connections):
             wanted.add("/tf_static")
         if any(c.topic == META_TOPIC and c.msgtype == STRING for c in reader.connections):
@@ -334,16 +335,19 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
         return f"t = {(t_ns - start) * 1e-9:.3f} s into the bag (stamp {t_ns * 1e-9:.9f})"
 
     tree = _Tree(name, describe, tolerance)
+    pose_is_tf = chosen["pose"] in tf_topics
     gas_t, gas_v, gas_frames = [], [], []
     wind_t, wind_v, wind_frames, wind_kind = [], [], [], None
     dets, grid, meta = [], None, {}
     for topic, t_recv, msg in raw:
-        if topic in ("/tf", "/tf_static"):
+        if topic in tf_topics:
             for tr in msg.transforms:
+                if not pose_is_tf and _frame(tr.child_frame_id) == robot_frame:
+                    continue  # the robot's pose comes from the pose topic; /tf still places the sensors
                 q, v = tr.transform.rotation, tr.transform.translation
                 tree.add(tr.header.frame_id, tr.child_frame_id, _stamp(tr.header), (v.x, v.y, _yaw(q)),
-                         static=topic == "/tf_static", topic=topic)
-        if topic == chosen["pose"] and topic != "/tf":
+                         static=topic.endswith("tf_static"), topic=topic)
+        elif topic == chosen["pose"]:
             p = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
             tree.add(msg.header.frame_id, robot_frame, _stamp(msg.header), (p.position.x, p.position.y, _yaw(p.orientation)),
                      static=False, topic=topic)

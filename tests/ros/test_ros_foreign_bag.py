@@ -94,6 +94,14 @@ def make_bag(path, storage):
     for t, p in zip(pose_t, compose(inverse(ODOM)[None], truth(pose_t))):  # odom -> base_link
         other = transform(ns(t), "map", "robot2/base_link", (8.0 + 0.1 * t, 8.0, 1.0))
         msgs.append((ns(t) + 3_000_000, "/tf", tf, T[tf](transforms=[transform(ns(t), "odom", "base_link", p), other])))
+    amcl_t = -0.1 + 0.2 * np.arange(77) + rng.uniform(-0.02, 0.02, 77)  # a 5 Hz localisation, map -> base_link
+    for t, p in zip(amcl_t, truth(amcl_t)):
+        pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(p[0]), y=float(p[1]), z=0.0),
+                                           orientation=quat(p[2]))
+        m = T["geometry_msgs/msg/PoseWithCovarianceStamped"](
+            header=header(ns(t), "map"), pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose,
+                                                                                         covariance=np.zeros(36)))
+        msgs.append((ns(t) + 8_000_000, "/amcl_pose", "geometry_msgs/msg/PoseWithCovarianceStamped", m))
     gas_t = 0.1 * np.arange(1, 141) + rng.uniform(-0.02, 0.02, 140)
     gas = np.array([VALUES[k % 4] for k in range(140)])
     for t, v in zip(gas_t, gas):
@@ -156,6 +164,17 @@ def test_streams_are_found_by_type_and_aligned(bag):
         np.testing.assert_allclose(d.camera, cam, rtol=0, atol=1e-9)
         np.testing.assert_allclose(d.centre[0], cam[:2] + (1.0, 0.35), rtol=0, atol=1e-9)
         assert d.class_id == ("tv", "person")
+
+
+def test_pose_from_a_pose_topic(bag):
+    """--topics pose=/amcl_pose: the robot's pose from a PoseWithCovarianceStamped (5 Hz), the sensors still placed
+    by /tf_static; the odom chain in /tf is not used for the robot."""
+    path, want = bag
+    data = read_bag(path, topics={"pose": "/amcl_pose"})
+    assert data.topics["pose"] == "/amcl_pose"
+    np.testing.assert_allclose(data.gas_xy, truth(want["gas_t"])[:, :2], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(data.wind, np.broadcast_to(WIND, data.wind.shape), rtol=0, atol=1e-6)
+    np.testing.assert_allclose(data.detections[3].camera, compose(truth(want["det_t"][3]), CAMERA), atol=1e-9)
 
 
 def test_steps_hits_and_frames(bag):
