@@ -34,7 +34,7 @@ from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._run import RunResult, run_config, step_metrics
 from ._step import VariantPosteriors
 
-__all__ = ["ReplayResult", "replay", "replay_frames", "replay_steps"]
+__all__ = ["ReplayResult", "replay", "replay_frames", "replay_steps", "write_replay"]
 
 
 class ReplayResult(SimpleNamespace):
@@ -168,9 +168,13 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
     if seed is None:
         seed = int(meta.get("seed", 0))
-    config = ExperimentConfig(**{k: v for k, v in meta.get("config", {}).items()
-                                 if k in ExperimentConfig.__dataclass_fields__}) if config is None and \
-        meta.get("config") else (ExperimentConfig() if config is None else config)
+    elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    if config is None:  # the recorded run's settings (what the estimators were tuned with), else the defaults
+        recorded = meta.get("config") or {}
+        config = ExperimentConfig(**{k: v for k, v in recorded.items() if k in ExperimentConfig.__dataclass_fields__})
+    elif not isinstance(config, ExperimentConfig):
+        raise TypeError(f"config must be an ExperimentConfig, got {type(config).__name__}")
     if threshold is None:
         threshold = float(meta.get("threshold", GasSensor().threshold))
     if not (np.isfinite(threshold) and threshold > 0):

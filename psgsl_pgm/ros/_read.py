@@ -305,7 +305,12 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     require()
     if not (isinstance(tolerance, (int, float)) and np.isfinite(tolerance) and tolerance >= 0):
         raise ValueError(f"tolerance must be a non-negative number of seconds, got {tolerance!r}")
+    if topics is not None and not isinstance(topics, dict):
+        raise TypeError(f"topics must be a dict of role -> topic, got {type(topics).__name__}")
     topics = dict(topics or {})
+    for role, topic in topics.items():
+        if not isinstance(topic, str) or not topic.startswith("/"):
+            raise ValueError(f"topics: the {role} topic must be a name starting with '/', got {topic!r}")
     map_frame, robot_frame = _frame(map_frame), _frame(robot_frame)
     folder, reader = _open(path)
     name = str(path)
