@@ -53,7 +53,7 @@ def simulate(seconds: float, seed: int, config: ExperimentConfig):
     watched = rec.watch(world)
     house = world.house
     tour = exploration_tour(house, start=spec.start_for(house))
-    n = int(round(seconds * 10))
+    n = round(seconds * 10)
     xy, heading = _path_at(tour, config.speed, np.arange(n) * 0.1)
     t0 = time.process_time()
     beliefs = VariantPosteriors(watched, "infotaxis", config, setting=spec)

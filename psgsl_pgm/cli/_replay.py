@@ -8,6 +8,8 @@ going backwards — is one line naming the bag, topic and time, exit 2, and OUT 
 
 from __future__ import annotations
 
+import numpy as np
+
 from ._usage import UsageError
 
 __all__ = ["add_parser", "check_record_extra", "run"]
@@ -25,7 +27,7 @@ def check_record_extra() -> None:
         raise UsageError(f"--record: {exc}") from None
 
 
-def _topic(text: str):
+def role_topic(text: str):
     role, sep, topic = text.partition("=")
     if not sep or not role or not topic:
         raise ValueError(f"expected ROLE=TOPIC, got {text!r}")
@@ -47,7 +49,7 @@ def add_parser(subparsers):
                    help="olfactory estimator (default: a psgsl-recorded bag's, else infotaxis)")
     p.add_argument("--seed", type=int, default=None, help="furniture layout of the embedded house (default: a "
                    "psgsl-recorded bag's, else 0)")
-    p.add_argument("--topics", nargs="+", type=_topic, default=[], metavar="ROLE=TOPIC",
+    p.add_argument("--topics", nargs="+", type=role_topic, default=[], metavar="ROLE=TOPIC",
                    help="use these topics (roles: pose, gas, wind, detections, map) instead of finding them by type")
     p.add_argument("--map-frame", default="map", help="fixed frame (default: %(default)s)")
     p.add_argument("--robot-frame", default="base_link", help="robot frame (default: %(default)s)")
@@ -91,8 +93,7 @@ def run(args) -> int:
     from ..experiment import VARIANTS
 
     for v, name in enumerate(VARIANTS):
-        err = "" if not run_.error.size or not (run_.error[-1, v] == run_.error[-1, v]) else \
-            f"error {run_.error[-1, v]:.2f} m, "
+        err = f"error {run_.error[-1, v]:.2f} m, " if run_.error.size and np.isfinite(run_.error[-1, v]) else ""
         print(f"  {name:<16} final: {err}spread {run_.spread[-1, v]:.2f} m, 90 % region {run_.region_area[-1, v]:.1f} m²")
     written = write_replay(res, args.out)
     print(f"written to {args.out}: {', '.join(p.name for p in written)}")

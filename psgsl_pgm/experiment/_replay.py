@@ -28,7 +28,15 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..sim import Camera, DetectorModel, GasSensor, House, default_world, load_world, match_names
+from ..sim import (
+    Camera,
+    DetectorModel,
+    GasSensor,
+    House,
+    default_world,
+    load_world,
+    match_names,
+)
 from ..sim._camera import Frame
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._run import RunResult, run_config, step_metrics
@@ -45,7 +53,7 @@ class ReplayResult(SimpleNamespace):
 def replay_frames(bag, house, detector: DetectorModel, camera: Camera):
     """The camera frames of ``bag``'s detections (see the module docstring): ``(frames, skipped)``."""
     grid = house.grid
-    h, w = grid.shape
+    w = grid.shape[1]
     labels = detector.labels
     nothing = detector.nothing
     frames, skipped = [], 0

@@ -20,15 +20,15 @@ from ._types import MISSING_EXTRA, require
 from ._write import STORAGES, write_bag
 
 __all__ = [
-    "BagData",
     "DEFAULT_TOLERANCE",
-    "Detections",
-    "Episode",
     "META_TOPIC",
     "MISSING_EXTRA",
     "ROLES",
     "START_NS",
     "STORAGES",
+    "BagData",
+    "Detections",
+    "Episode",
     "bag_topics",
     "read_bag",
     "require",

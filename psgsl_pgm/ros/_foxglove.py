@@ -70,7 +70,7 @@ def _write(ep: Episode, fh) -> None:
         return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)), orientation=quat(yaw))
 
     grid = ep.grid
-    h, w = grid.shape
+    w = grid.shape[1]
     corner = pose(grid.origin[0], grid.origin[1])
 
     def grid_msg(t, values, kind):

@@ -312,7 +312,7 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
         if not isinstance(topic, str) or not topic.startswith("/"):
             raise ValueError(f"topics: the {role} topic must be a name starting with '/', got {topic!r}")
     map_frame, robot_frame = _frame(map_frame), _frame(robot_frame)
-    folder, reader = _open(path)
+    _, reader = _open(path)
     name = str(path)
     try:
         chosen = _choose(name, reader.connections, topics)

@@ -64,7 +64,7 @@ def interpolate(t_ns, values, query_ns, *, tolerance: float, where: str, angle_c
     t_ns = np.asarray(t_ns, dtype=np.int64)
     values = np.asarray(values, dtype=np.float64)
     q = np.asarray(query_ns, dtype=np.int64)
-    tol = int(round(float(tolerance) * 1e9))
+    tol = round(float(tolerance) * 1e9)
     out = np.empty((len(q), values.shape[1]))
     if len(t_ns) == 0:
         if len(q):

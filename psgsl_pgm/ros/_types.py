@@ -97,7 +97,7 @@ _VISION_MSGS = {
 def require():
     """Import rosbags; ImportError naming the ``ros`` extra when it is missing."""
     try:
-        import rosbags.rosbag2  # noqa: F401
+        import rosbags.rosbag2
         import rosbags.typesys  # noqa: F401
     except ModuleNotFoundError as err:
         if (err.name or "").split(".")[0] != "rosbags":

@@ -35,7 +35,7 @@ from ._episode import START_NS, Episode, stamp_ns
 from ._time import interpolate, wrap_angle
 from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, UNITS_PPM, typestore
 
-__all__ = ["STORAGES", "write_bag", "replace_folder"]
+__all__ = ["STORAGES", "replace_folder", "write_bag"]
 
 #: Storage formats of :func:`write_bag`.
 STORAGES = ("mcap", "sqlite3")

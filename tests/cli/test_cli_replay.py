@@ -14,7 +14,7 @@ import psgsl_pgm.cli._main as cli
 
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
-from tests.ros.bags import episode_bag  # noqa: E402
+from tests.ros.bags import episode_bag
 
 
 def _error_line(capsys):
@@ -103,5 +103,25 @@ def test_core_and_simulator_never_import_the_ros_packages():
     code = ("import sys, psgsl_pgm, psgsl_pgm.sim, psgsl_pgm.experiment, psgsl_pgm.search, psgsl_pgm.ros, "
             "psgsl_pgm.cli._main; bad = sorted(m for m in sys.modules if m.split('.')[0] in "
             "('rosbags', 'mcap', 'foxglove')); print(bad); sys.exit(1 if bad else 0)")
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+@pytest.mark.parametrize("command, module, function", [
+    (["experiment", "--sources", "oven", "--seeds", "1"], "psgsl_pgm.experiment", "run_experiment"),
+    (["search", "--sources", "oven", "--seeds", "1", "--no-figures"], "psgsl_pgm.search._grid", "run_search_grid"),
+])
+def test_record_reaches_the_grid(monkeypatch, tmp_path, command, module, function):
+    """--record is handed to the grid (which writes the episodes; tests/ros/test_ros_record.py); without it, not."""
+    import importlib
+
+    seen = []
+
+    def fake(*args, **kwargs):
+        seen.append(kwargs.get("record"))
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(importlib.import_module(module), function, fake)
+    for extra, want in (([], False), (["--record"], True)):
+        assert cli.main([*command, *extra, "--out", str(tmp_path / "o")]) == 2
+        assert seen[-1] is want

@@ -10,9 +10,9 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
-from psgsl_pgm.ros import bag_topics, read_bag  # noqa: E402
+from psgsl_pgm.ros import bag_topics, read_bag
 
-from .bags import episode_bag, rewrite  # noqa: E402
+from .bags import episode_bag, rewrite
 
 
 def _storage_file(bag, suffix):

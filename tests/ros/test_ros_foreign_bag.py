@@ -14,12 +14,12 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
-from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from psgsl_pgm.experiment._replay import replay, replay_frames, replay_steps  # noqa: E402
-from psgsl_pgm.ros import read_bag  # noqa: E402
-from psgsl_pgm.sim import Camera, DetectorModel, default_house  # noqa: E402
+from psgsl_pgm.experiment._replay import replay, replay_frames, replay_steps
+from psgsl_pgm.ros import read_bag
+from psgsl_pgm.sim import Camera, DetectorModel, default_house
 
 # the test's own copy of the message layouts (the lab's GasSensor and Anemometer; vision_msgs 4.x)
 DEFS = {

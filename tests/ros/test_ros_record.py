@@ -8,9 +8,9 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
-from psgsl_pgm.experiment import ExperimentConfig, load_run, run_experiment  # noqa: E402
-from psgsl_pgm.experiment._replay import replay  # noqa: E402
-from psgsl_pgm.ros import read_bag  # noqa: E402
+from psgsl_pgm.experiment import ExperimentConfig, load_run, run_experiment
+from psgsl_pgm.experiment._replay import replay
+from psgsl_pgm.ros import read_bag
 
 
 def test_experiment_record_writes_a_replayable_bag_beside_each_run(tmp_path):

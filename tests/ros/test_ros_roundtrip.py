@@ -10,10 +10,10 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
-from psgsl_pgm.experiment import VARIANTS, ExperimentConfig, run_search  # noqa: E402
-from psgsl_pgm.experiment._record import EpisodeRecorder  # noqa: E402
-from psgsl_pgm.experiment._replay import replay  # noqa: E402
-from psgsl_pgm.ros import read_bag, write_bag, write_foxglove  # noqa: E402
+from psgsl_pgm.experiment import VARIANTS, ExperimentConfig, run_search
+from psgsl_pgm.experiment._record import EpisodeRecorder
+from psgsl_pgm.experiment._replay import replay
+from psgsl_pgm.ros import read_bag, write_bag, write_foxglove
 
 #: A short episode (10 stops, the first a four-heading look-around) with a short warm-up: a few seconds.
 CONFIG = ExperimentConfig(stops=10, warm_up=5.0)

@@ -8,9 +8,15 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
-from rosbags.typesys import get_types_from_msg  # noqa: E402
+from rosbags.typesys import get_types_from_msg
 
-from psgsl_pgm.ros._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, _parse_definitions, typestore  # noqa: E402
+from psgsl_pgm.ros._types import (
+    ANEMOMETER,
+    DETECTIONS,
+    GAS_SENSOR,
+    _parse_definitions,
+    typestore,
+)
 
 LAB = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "olfaction_msgs"
 
