@@ -2,21 +2,17 @@
 
 Channels (frame ``map``; log times = the episode's stamps, :data:`psgsl_pgm.ros._episode.START_NS` + t):
 
-=========================  =========================  ===========================================================
-topic                      schema                     content
-=========================  =========================  ===========================================================
-``/map``                   ``foxglove.Grid``          occupancy (uint8: 0 free, 100 occupied), once
-``/objects``               ``foxglove.SceneUpdate``   one cube (footprint box, height) and label per object, once
-``/posterior/<variant>``   ``foxglove.Grid``          p(s | ...) of each variant (float32) after every step
-``/semantics/best_class``  ``foxglove.Grid``          the most likely class per cell (uint8; the channel's
-                                                      metadata ``classes`` names the values) after every step
-``/tf``                    ``foxglove.FrameTransform`` ``map`` -> ``base_link`` at every pose sample
-``/robot/pose``            ``foxglove.PoseInFrame``   the robot's pose at every pose sample
-``/robot/path``            ``foxglove.PosesInFrame``  the path so far, after every step
-``/robot/next``            ``foxglove.PoseInFrame``   the pose chosen next (tour stop or policy choice)
-``/gas``                   JSON                       ``{"ppm": value, "hit": value >= threshold}`` per reading
-``/wind``                  ``foxglove.SceneUpdate``   an arrow at the robot along the wind, length = speed (m/s)
-=========================  =========================  ===========================================================
+* ``/map`` (``foxglove.Grid``): occupancy (uint8: 0 free, 100 occupied), once;
+* ``/objects`` (``foxglove.SceneUpdate``): one cube (footprint box, height) and label per object, once;
+* ``/posterior/<variant>`` (``foxglove.Grid``): p(s | ...) of each variant (float32) after every step;
+* ``/semantics/best_class`` (``foxglove.Grid``): the most likely class per cell (uint8; the channel's metadata
+  ``classes`` names the values) after every step;
+* ``/tf`` (``foxglove.FrameTransform``): ``map`` -> ``base_link`` at every pose sample;
+* ``/robot/pose`` (``foxglove.PoseInFrame``): the robot's pose at every pose sample;
+* ``/robot/path`` (``foxglove.PosesInFrame``): the path so far, after every step;
+* ``/robot/next`` (``foxglove.PoseInFrame``): the pose chosen next (tour stop or policy choice);
+* ``/gas`` (JSON): ``{"ppm": value, "hit": value >= threshold}`` per reading;
+* ``/wind`` (``foxglove.SceneUpdate``): an arrow at the robot along the wind, length = speed (m/s).
 
 The file is written to a temporary file beside the target and renamed into place (whole or not at all).
 """

@@ -2,21 +2,15 @@
 
 Topics are found by message type (:data:`ROLES`), or named per role (``topics={"gas": "/PID/Sensor_reading"}``):
 
-=============  ==============================================================  ==========================================
-role           message types (first match preferred)                             what is taken
-=============  ==============================================================  ==========================================
-``pose``       ``tf2_msgs/msg/TFMessage`` on ``/tf`` (with ``/tf_static``),     the robot frame's pose in the map frame
-               ``geometry_msgs/msg/PoseWithCovarianceStamped``, ``PoseStamped``
-``gas``        ``olfaction_msgs/msg/GasSensor`` (``raw``), ``std_msgs/msg/       the reading, at its header stamp (a
-               Float32`` / ``Float64``                                          Float has none: the bag's receive time)
-``wind``       ``geometry_msgs/msg/Vector3Stamped``, ``olfaction_msgs/msg/        the wind vector in the map frame: a
-               Anemometer``                                                     Vector3 rotated from its frame; an
-                                                                                Anemometer's speed and direction (the
-                                                                                direction the wind comes FROM, in the
-                                                                                sensor frame, as GADEN publishes it)
-``detections`` ``vision_msgs/msg/Detection3DArray`` (optional)                  per detection: class id, score, box
-``map``        ``nav_msgs/msg/OccupancyGrid`` (optional)                         the first map
-=============  ==============================================================  ==========================================
+* ``pose``: ``tf2_msgs/msg/TFMessage`` on ``/tf`` (with ``/tf_static``), else
+  ``geometry_msgs/msg/PoseWithCovarianceStamped`` or ``PoseStamped`` — the robot frame's pose in the map frame;
+* ``gas``: ``olfaction_msgs/msg/GasSensor`` (field ``raw``), else ``std_msgs/msg/Float32`` / ``Float64`` — the
+  reading at its header stamp (a Float has none: the bag's receive time);
+* ``wind``: ``geometry_msgs/msg/Vector3Stamped``, else ``olfaction_msgs/msg/Anemometer`` — the wind vector in the
+  map frame: a Vector3 rotated from its frame; an Anemometer's speed and direction (the direction the wind comes
+  FROM, in the sensor frame, as GADEN publishes it);
+* ``detections`` (optional): ``vision_msgs/msg/Detection3DArray`` — per detection its best class id, score, box;
+* ``map`` (optional): ``nav_msgs/msg/OccupancyGrid`` — the first map.
 
 Frames: every pose is the 2-D pose (x, y, yaw) of a frame in ``map_frame``, composed along the transform tree of
 ``/tf`` and ``/tf_static`` (other robots' frames in ``/tf`` are simply not on the chain). A sensor's header frame

@@ -2,19 +2,15 @@
 
 Topics (all stamps = the episode's times from :data:`psgsl_pgm.ros._episode.START_NS`):
 
-=====================  =====================================  ==============================================
-topic                  type                                   content
-=====================  =====================================  ==============================================
-``/tf``                ``tf2_msgs/msg/TFMessage``             ``map`` -> ``base_link`` at every pose sample
-``/gas``               ``olfaction_msgs/msg/GasSensor``       ``raw`` in ppm (``raw_units`` = UNITS_PPM)
-``/anemometer``        ``olfaction_msgs/msg/Anemometer``      speed, and the direction the wind comes from in
-                                                              ``base_link`` (GADEN's convention; float32)
-``/wind``              ``geometry_msgs/msg/Vector3Stamped``   the same reading in ``map`` at full precision
-``/detections``        ``vision_msgs/msg/Detection3DArray``   one detection per cell reported as an object:
-                                                              class id, a cell-sized box, in ``base_link``
-``/map``               ``nav_msgs/msg/OccupancyGrid``         the occupancy grid (0 free, 100 occupied)
-``/psgsl/episode``     ``std_msgs/msg/String``                JSON: world, source, seed, estimator, threshold
-=====================  =====================================  ==============================================
+* ``/tf`` (``tf2_msgs/msg/TFMessage``): ``map`` -> ``base_link`` at every pose sample;
+* ``/gas`` (``olfaction_msgs/msg/GasSensor``): ``raw`` in ppm (``raw_units`` = UNITS_PPM);
+* ``/anemometer`` (``olfaction_msgs/msg/Anemometer``): speed, and the direction the wind comes from in
+  ``base_link`` (GADEN's convention; float32);
+* ``/wind`` (``geometry_msgs/msg/Vector3Stamped``): the same reading in ``map`` at full precision;
+* ``/detections`` (``vision_msgs/msg/Detection3DArray``): one detection per cell reported as an object — class id,
+  a cell-sized box, in ``base_link``;
+* ``/map`` (``nav_msgs/msg/OccupancyGrid``): the occupancy grid (0 free, 100 occupied);
+* ``/psgsl/episode`` (``std_msgs/msg/String``): JSON — world, source, seed, estimator, settings, threshold.
 
 The Anemometer message holds float32 fields; ``/wind`` carries the reading at float64 so that a replay is exact
 (the reader prefers it). The bag is written into a temporary folder beside the target and renamed into place:
