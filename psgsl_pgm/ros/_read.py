@@ -136,12 +136,17 @@ def _open(path):
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(2, "No such file or directory", str(path))
-    folder = path if path.is_dir() else path.parent
+    if path.is_dir() or not (path.parent / "metadata.yaml").is_file():
+        folder = path  # a bag folder, or a bare .mcap file (rosbags reads its own summary)
+    else:
+        folder = path.parent  # a storage file inside a bag folder
     try:
         reader = Reader(folder)
         reader.open()
     except Exception as exc:  # noqa: BLE001 - a file that is no bag: rosbags raises many kinds; one message here
-        raise ValueError(f"{path}: not a readable ROS 2 bag ({_reason(exc)})") from None
+        hint = ("; a Foxglove .mcap written by --record is for viewing: replay the .bag folder beside it"
+                if path.suffix == ".mcap" else "")
+        raise ValueError(f"{path}: not a readable ROS 2 bag ({_reason(exc)}){hint}") from None
     return folder, reader
 
 
@@ -282,7 +287,8 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     Parameters
     ----------
     path : str or Path
-        The bag folder (``metadata.yaml`` with ``.db3`` or ``.mcap`` files), or a file inside it.
+        The bag folder (``metadata.yaml`` with ``.db3`` or ``.mcap`` files), a file inside it, or a bare ROS 2
+        ``.mcap`` file.
     topics : dict, optional, keyword-only
         Role -> topic, overriding the discovery by type (roles: :data:`ROLES`).
     map_frame, robot_frame : str, keyword-only

@@ -123,3 +123,22 @@ def test_bag_map_replaces_the_house(tmp_path):
     nomap = rewrite(bag, tmp_path / "nomap", keep=lambda topic, t, m: topic != "/map")
     with pytest.raises(ValueError, match="nomap: the bag has no nav_msgs/msg/OccupancyGrid topic"):
         replay(nomap, bag_map=True)
+
+
+def test_a_bare_mcap_file_and_the_foxglove_file(tmp_path):
+    """A ROS 2 MCAP file without its metadata.yaml reads like its folder; the Foxglove file is refused with a hint."""
+    import shutil
+
+    from psgsl_pgm.ros import write_foxglove
+
+    from .bags import synthetic_episode
+
+    bag = episode_bag(tmp_path / "bag")
+    bare = tmp_path / "bare.mcap"
+    shutil.copy(_storage_file(bag, ".mcap"), bare)
+    a, b = read_bag(bag), read_bag(bare)
+    np.testing.assert_array_equal(a.gas_xy, b.gas_xy)
+    np.testing.assert_array_equal(a.wind, b.wind)
+    fox = write_foxglove(tmp_path / "run.mcap", synthetic_episode())
+    with pytest.raises(ValueError, match=r"run.mcap: .*replay the .bag folder beside it"):
+        read_bag(fox)
