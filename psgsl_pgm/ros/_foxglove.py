@@ -42,6 +42,8 @@ def _require():
 
 def write_foxglove(path, episode: Episode):
     """Write ``episode`` as a Foxglove MCAP file at ``path`` (see the module docstring); returns the path."""
+    if not isinstance(episode, Episode):
+        raise TypeError(f"episode must be a psgsl_pgm.ros.Episode, got {type(episode).__name__}")
     _require()
     return atomic_write(path, _write, episode)
 

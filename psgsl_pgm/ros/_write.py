@@ -73,6 +73,8 @@ def write_bag(path, episode: Episode, *, storage: str = "mcap") -> Path:
     -------
     Path
     """
+    if not isinstance(episode, Episode):
+        raise TypeError(f"episode must be a psgsl_pgm.ros.Episode, got {type(episode).__name__}")
     if storage not in STORAGES:
         raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
     return replace_folder(path, lambda tmp: _write(tmp, episode, storage))

@@ -142,3 +142,17 @@ def test_a_bare_mcap_file_and_the_foxglove_file(tmp_path):
     fox = write_foxglove(tmp_path / "run.mcap", synthetic_episode())
     with pytest.raises(ValueError, match=r"run.mcap: .*replay the .bag folder beside it"):
         read_bag(fox)
+
+
+def test_writers_check_their_arguments(tmp_path):
+    from psgsl_pgm.ros import write_bag, write_foxglove
+
+    from .bags import synthetic_episode
+
+    with pytest.raises(TypeError, match="episode must be a psgsl_pgm.ros.Episode, got dict"):
+        write_bag(tmp_path / "b", {})
+    with pytest.raises(TypeError, match="episode must be a psgsl_pgm.ros.Episode, got dict"):
+        write_foxglove(tmp_path / "f.mcap", {})
+    with pytest.raises(ValueError, match=r"storage must be one of \('mcap', 'sqlite3'\), got 'db3'"):
+        write_bag(tmp_path / "b", synthetic_episode(), storage="db3")
+    assert list(tmp_path.iterdir()) == []  # nothing written
