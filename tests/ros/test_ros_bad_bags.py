@@ -156,3 +156,22 @@ def test_writers_check_their_arguments(tmp_path):
     with pytest.raises(ValueError, match=r"storage must be one of \('mcap', 'sqlite3'\), got 'db3'"):
         write_bag(tmp_path / "b", synthetic_episode(), storage="db3")
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_bag_folder_is_written_whole_or_not_at_all(tmp_path):
+    from psgsl_pgm.ros._write import replace_folder
+
+    def fails(tmp):
+        tmp.mkdir()
+        (tmp / "half.mcap").write_bytes(b"abc")
+        raise RuntimeError("killed")
+
+    with pytest.raises(RuntimeError):
+        replace_folder(tmp_path / "run.bag", fails)
+    assert list(tmp_path.iterdir()) == []  # no bag, no temporary folder
+    bag = episode_bag(tmp_path / "run.bag", n=4)
+    with pytest.raises(RuntimeError):
+        replace_folder(bag, fails)
+    assert len(read_bag(bag).gas) == 4  # the old bag is still whole
+    episode_bag(bag, n=6)  # a new recording replaces it
+    assert len(read_bag(bag).gas) == 6 and [p.name for p in tmp_path.iterdir()] == ["run.bag"]
