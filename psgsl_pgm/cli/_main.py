@@ -17,7 +17,7 @@ import os
 import sys
 from pathlib import Path
 
-from . import _export, _search, _world
+from . import _export, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
     MAX_WORKERS,
@@ -109,13 +109,15 @@ def _experiment(args) -> int:
     else:
         check_sources(sources, seeds=seeds)  # unknown class, off the map: refused before any run
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs; creates nothing
+    if args.record:
+        _replay.check_record_extra()
     where = "the embedded house" if spec is None else args.world
     print(f"psgsl experiment: {where}, sources {', '.join(map(str, names))}, {_seeds_text(seeds)}, gas "
           f"{config.gas!r} -> {args.out}", flush=True)
     try:
         summaries = run_experiment(sources, seeds, args.estimators, out=args.out, workers=args.workers,
                                    progress=not args.quiet, config=config, scheduler=args.scheduler,
-                                   world=args.world)
+                                   world=args.world, record=args.record)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=os.path.join(args.out, "runs"))
     for key, summary in summaries.items():
@@ -251,6 +253,8 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--stops", type=positive_int, default=None,
                      help="follow only the first N stops of the tour (quick checks; default: the whole tour)")
     exp.add_argument("--quiet", action="store_true", help="no progress bar")
+    exp.add_argument("--record", action="store_true", help="also write each run's episode beside it: runs/<run>.bag/ "
+                     "(ROS 2 bag, read by psgsl replay) and runs/<run>.mcap (Foxglove); needs the ros extra")
     exp.set_defaults(func=_experiment)
 
     est = sub.add_parser("estimate", help="fuse your own class beliefs and olfactory map: p(s | g, z)")
@@ -274,6 +278,7 @@ def build_parser() -> argparse.ArgumentParser:
     _world.add_parser(sub)
     _export.add_parser(sub)
     _search.add_parser(sub)
+    _replay.add_parser(sub)
     return parser
 
 

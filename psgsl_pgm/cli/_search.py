@@ -60,6 +60,8 @@ def add_parser(subparsers):
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--record", action="store_true", help="also write each run's episode beside it: runs/<run>.bag/ "
+                   "(ROS 2 bag, read by psgsl replay) and runs/<run>.mcap (Foxglove); needs the ros extra")
     p.add_argument("--open-space", action="store_true",
                    help="run the open-space benchmark instead (writes OUT/open_space.json)")
     p.add_argument("--open-policies", nargs="+", choices=OPEN_SPACE_POLICIES,
@@ -154,12 +156,16 @@ def _run(args) -> int:
 
     # a source the robot can never find is refused before any run (in the first seed's house)
     check_findable(spec if spec is not None else default_world(), seeds[0], sources=sources, **geometry)
+    if args.record:
+        from ._replay import check_record_extra
+
+        check_record_extra()
     try:
         search = SearchConfig(time_budget=args.budget, score=args.score, **geometry)
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, seeds,
                                     out=args.out, workers=args.workers, search=search, config=config,
                                     progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler,
-                                    world=args.world)
+                                    world=args.world, record=args.record)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     for key, summary in summaries.items():

@@ -8,6 +8,7 @@ camera frames; three variants turn it into a source distribution (:data:`VARIANT
 * ``semantics`` — fused with the semantic term p(s | z) of class beliefs built from the camera;
 * ``semantics+rooms`` — the same, with class beliefs that start from the room-category map.
 
+:func:`replay` runs a robot's ROS 2 bag through the same per-step code (``psgsl replay``).
 :func:`run_search` runs one search (its per-step code, :class:`VariantPosteriors` and :func:`visit`, is also
 the closed loop's, :mod:`psgsl_pgm.search`); :func:`run_experiment` a grid of sources × seeds × estimators (parallel,
 resumable); :func:`run_demo` the command ``psgsl demo``.
@@ -20,6 +21,7 @@ from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
 from ._metrics import error_and_spread, mean_ci
 from ._reliability import plot_reliability, reliability_table
+from ._replay import ReplayResult, replay, write_replay
 from ._run import RunResult, run_search
 from ._sources import check_sources
 from ._step import VariantPosteriors, visit
@@ -33,6 +35,7 @@ __all__ = [
     "DEMO_SEEDS",
     "ESTIMATORS",
     "ExperimentConfig",
+    "ReplayResult",
     "RunResult",
     "Tour",
     "VARIANTS",
@@ -53,6 +56,7 @@ __all__ = [
     "plot_reliability",
     "plot_room_types",
     "reliability_table",
+    "replay",
     "run_demo",
     "run_experiment",
     "run_search",
@@ -60,4 +64,5 @@ __all__ = [
     "summarize",
     "visit",
     "write_outputs",
+    "write_replay",
 ]

@@ -42,26 +42,47 @@ def _world(path, world_digest: str | None = None):
     return _world_of(path, digest(world_key(path)) if world_digest is None else world_digest)
 
 
-def search_in_world(source, seed, estimator, *, world=None, world_digest=None, **kwargs):
+def search_in_world(source, seed, estimator, *, world=None, world_digest=None, record=None, **kwargs):
     """:func:`run_search` in the world of the world file ``world`` (a path, picklable for worker processes;
-    ``world_digest``: see :func:`_world`). The run's config records the start the robot used."""
+    ``world_digest``: see :func:`_world`). The run's config records the start the robot used. With ``record``
+    (a path without suffix) the episode is also written as ``<record>.bag/`` and ``<record>.mcap``
+    (:class:`psgsl_pgm.experiment._record.EpisodeRecorder`)."""
     from . import _run
 
-    result = _run.run_search(source, seed, estimator, world_spec=_world(world, world_digest), **kwargs)
+    recorder = None
+    if record is not None:
+        from ._record import EpisodeRecorder
+
+        recorder = EpisodeRecorder()
+    result = _run.run_search(source, seed, estimator, world_spec=_world(world, world_digest), recorder=recorder,
+                             **kwargs)
     result.config["start"] = [float(v) for v in result.position[0]]
+    if recorder is not None:
+        from ._config import VARIANTS
+
+        spec = parse_source(source)
+        meta = {"world": world, "source": spec if isinstance(spec, str) else list(spec), "seed": int(seed),
+                "estimator": estimator, "config": {k: v for k, v in result.config.items() if k != "start"}}
+        recorder.write(record, variants=VARIANTS, meta=meta)
     return result
 
 
 def experiment_jobs(sources, seeds, estimators, *, out, config: ExperimentConfig, world=None,
-                    world_digest=None) -> list:
+                    world_digest=None, record: bool = False) -> list:
     """The grid's jobs (:class:`psgsl_pgm.runs._runner.GridJob`): one :func:`run_search` per (source, estimator,
     seed) in the world file ``world`` (None: the embedded house), its result to :func:`run_path`; the smallest
-    seed keeps the progression figure's snapshots."""
+    seed keeps the progression figure's snapshots. ``record``: each run also writes its episode beside it
+    (``runs/<run>.bag/``, ``runs/<run>.mcap``)."""
     first = min(seeds)
-    return [GridJob(run_path(out, source, estimator, seed), search_in_world, (source, seed, estimator),
-                    {"config": config, "snapshot_at": SNAPSHOTS if seed == first else (), "world": world,
-                     "world_digest": world_digest})
-            for source, estimator, seed in itertools.product(sources, estimators, seeds)]
+    jobs = []
+    for source, estimator, seed in itertools.product(sources, estimators, seeds):
+        path = run_path(out, source, estimator, seed)
+        kwargs = {"config": config, "snapshot_at": SNAPSHOTS if seed == first else (), "world": world,
+                  "world_digest": world_digest}
+        if record:
+            kwargs["record"] = str(path.with_suffix(""))
+        jobs.append(GridJob(path, search_in_world, (source, seed, estimator), kwargs))
+    return jobs
 
 
 def experiment_key(config: ExperimentConfig, world_part: dict, *, flat: bool = False, source=None,
@@ -75,7 +96,7 @@ def experiment_key(config: ExperimentConfig, world_part: dict, *, flat: bool = F
 
 def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",), *, out, workers: int = 2,
                    config: ExperimentConfig | None = None, progress: bool = True, flat: bool = False,
-                   scheduler: str | None = None, world=None) -> dict:
+                   scheduler: str | None = None, world=None, record: bool = False) -> dict:
     """Run every (source, seed, estimator) not yet on disk, then aggregate everything in ``out``.
 
     Parameters
@@ -104,6 +125,9 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     world : str or Path, optional, keyword-only
         A world file (:func:`psgsl_pgm.load_world`); default: the embedded house. Loaded and checked here, before
         any run, and once more in every worker process.
+    record : bool, keyword-only
+        Also write every run's episode beside it: ``runs/<run>.bag/`` (a ROS 2 bag that ``psgsl replay`` reads)
+        and ``runs/<run>.mcap`` (Foxglove); needs the ``ros`` extra. Runs already stored are not re-run.
 
     Returns
     -------
@@ -142,7 +166,7 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
 
     with grid_folder(out, key, read_key=read_run_key) as out:
         jobs = experiment_jobs(sources, seeds, estimators, out=out, config=config, world=world,
-                               world_digest=world_digest)
+                               world_digest=world_digest, record=record)
         run_grid(jobs, write=write, scheduler=scheduler, workers=workers, progress=progress, desc="search runs")
         return write_outputs(out, flat=flat, world=world)
 

@@ -23,7 +23,7 @@ from ._metrics import credible_region, error_and_spread, hpd_level
 from ._step import VariantPosteriors, semantic_terms, start_run, visit
 from ._tour import Tour, exploration_tour
 
-__all__ = ["RunResult", "run_config", "run_search", "semantic_terms", "walk"]
+__all__ = ["RunResult", "run_config", "run_search", "semantic_terms", "step_metrics", "walk"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +89,7 @@ def walk(world, tour: Tour, config: ExperimentConfig, *, camera: bool = True):
 
 
 def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
-               snapshot_at=(), world=None, tour: Tour | None = None, world_spec=None) -> RunResult:
+               snapshot_at=(), world=None, tour: Tour | None = None, world_spec=None, recorder=None) -> RunResult:
     """Run one search in a house (the embedded one, or a world file's) and measure every variant at every step.
 
     Parameters
@@ -113,12 +113,16 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         (:func:`psgsl_pgm.load_world`); default: the embedded house, :func:`psgsl_pgm.sim.default_world`.
         The source region is the estimators' prior p(s) (uniform on it, zero elsewhere); with a
         ``semantic_map`` the class beliefs come from it instead of the simulated camera.
+    recorder : psgsl_pgm.experiment._record.EpisodeRecorder, optional, keyword-only
+        Logs the readings, frames and posteriors of the episode (``--record``); the run itself is unchanged.
 
     Returns
     -------
     RunResult
     """
     config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
+    if recorder is not None:
+        world = recorder.watch(world)
     house = world.house
     tour = exploration_tour(house, start=setting.start_for(house)) if tour is None else tour
     if config.stops is not None and config.stops < len(tour):
@@ -147,15 +151,13 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
 
     def record(step):
         post = beliefs.posteriors(VARIANTS)  # p(s | g), and p(s | g, z) without / with rooms
-        err[step], spr[step] = error_and_spread(post, centres, truth)
+        err[step], spr[step], region_hit[step], region_area[step], level[step] = step_metrics(
+            post, centres, truth, truth_cell, cell_area)
         times[step] = world.time - t0
-        for v in range(len(VARIANTS)):  # calibration of the declared 90 % region
-            region = credible_region(post[v], 0.9)
-            region_hit[step, v] = region.ravel()[truth_cell]
-            region_area[step, v] = float(region.sum()) * cell_area
-            level[step, v] = hpd_level(post[v], truth_cell)
         if step in keep:
             snaps[step] = post
+        if recorder is not None:  # the pose the tour goes to next
+            recorder.step(post, beliefs, chosen=(*tour.stops[step], tour.headings[step][0]) if step < n else None)
 
     pos[0] = tour.stops[0]
     record(0)
@@ -166,6 +168,24 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
     return RunResult(label, int(seed), estimator, truth, times, pos, hits, err, spr, snaps,
                      run_config(config, setting), region_hit, region_area, level)
+
+
+def step_metrics(post, centres, truth, truth_cell, cell_area):
+    """Per-variant metrics of posteriors ``post`` (V, H, W): error and spread (:func:`error_and_spread`), and the
+    calibration of the declared 90 % region — whether it holds ``truth_cell`` (flat index; None: no known source,
+    False), its area (m², ``cell_area`` per cell) and the HPD level of ``truth_cell`` (NaN without one)."""
+    known = truth_cell is not None
+    err, spr = error_and_spread(post, centres, truth if known else centres[0, 0])  # the spread needs no source
+    if not known:
+        err = np.full_like(err, np.nan)
+    hit, area, level = np.zeros(len(post), bool), np.empty(len(post)), np.full(len(post), np.nan)
+    for v in range(len(post)):
+        region = credible_region(post[v], 0.9)
+        area[v] = float(region.sum()) * cell_area
+        if truth_cell is not None:
+            hit[v] = region.ravel()[truth_cell]
+            level[v] = hpd_level(post[v], truth_cell)
+    return err, spr, hit, area, level
 
 
 def run_config(config: ExperimentConfig, world_spec) -> dict:

@@ -30,14 +30,29 @@ def search_key(config: ExperimentConfig, search: SearchConfig, world_part: dict)
     return run_key("search", world_part, experiment=config, search=search)
 
 
-def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None, world_digest=None, **kwargs):
+def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None, world_digest=None, record=None,
+                         **kwargs):
     """:func:`run_closed_loop` in the world of the world file ``world`` (a resolved path, picklable for worker
     processes; None: the embedded house; ``world_digest``: the content it was keyed with, see
-    :func:`psgsl_pgm.experiment._driver._world`). The stored run's config names the world file."""
+    :func:`psgsl_pgm.experiment._driver._world`). The stored run's config names the world file. With ``record``
+    (a path without suffix) the episode is also written as ``<record>.bag/`` and ``<record>.mcap``."""
+    recorder = None
+    if record is not None:
+        from ..experiment._record import EpisodeRecorder
+
+        recorder = EpisodeRecorder()
     if world is None:  # the embedded house: the loop's own default world (part of the package)
-        return run_closed_loop(source, seed, policy, variant, estimator, **kwargs)
-    run = run_closed_loop(source, seed, policy, variant, estimator, world_spec=_world(world, world_digest), **kwargs)
-    run.config["world"] = str(world)
+        run = run_closed_loop(source, seed, policy, variant, estimator, recorder=recorder, **kwargs)
+    else:
+        run = run_closed_loop(source, seed, policy, variant, estimator, world_spec=_world(world, world_digest),
+                              recorder=recorder, **kwargs)
+        run.config["world"] = str(world)
+    if recorder is not None:
+        spec = parse_source(source)
+        meta = {"world": world, "source": spec if isinstance(spec, str) else list(spec), "seed": int(seed),
+                "estimator": estimator, "policy": policy, "variant": variant,
+                "config": dict(run.config["experiment"])}
+        recorder.write(record, variants=VARIANTS, meta=meta)
     return run
 
 
@@ -251,7 +266,7 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
                     estimators=("infotaxis",), seeds=range(10), *, out, workers: int = 2,
                     config: ExperimentConfig | None = None, search: SearchConfig | None = None,
                     progress: bool = True, figures: bool = True, grid=None, scheduler: str | None = None,
-                    world=None) -> dict:
+                    world=None, record: bool = False) -> dict:
     """Run every (source, policy, variant, estimator, seed) not yet on disk, then aggregate ``out``.
 
     Jobs are submitted seed by seed (all combinations of seed 0, then of seed 1, …), so that an interrupted grid
@@ -269,7 +284,9 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     both configs, the package version; :mod:`psgsl_pgm.runs._key`) differs is refused, naming each differing
     setting, before anything is created; a second process on the same folder is refused
     (:func:`psgsl_pgm.runs._runner.grid_folder`). Aggregation covers every run stored in ``out/runs``
-    (:func:`write_search_outputs`). Returns the top-level summary.
+    (:func:`write_search_outputs`). Returns the top-level summary. ``record`` (keyword-only): every run also
+    writes its episode beside it, ``runs/<run>.bag/`` (a ROS 2 bag, MCAP storage) and ``runs/<run>.mcap``
+    (Foxglove); needs the ``ros`` extra.
     """
     config = ExperimentConfig() if config is None else config
     search = SearchConfig() if search is None else search
@@ -304,10 +321,13 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
         write_search_run(run, fh)
 
     with grid_folder(out, key, read_key=read_run_key) as out:
-        jobs = [GridJob(search_run_path(out, source, policy, variant, estimator, seed),
-                        closed_loop_in_world, (source, seed, policy, variant, estimator),
-                        {"config": config, "search": search, "world": world, "world_digest": world_digest})
-                for source, policy, variant, estimator, seed in grid]
+        jobs = []
+        for source, policy, variant, estimator, seed in grid:
+            path = search_run_path(out, source, policy, variant, estimator, seed)
+            kwargs = {"config": config, "search": search, "world": world, "world_digest": world_digest}
+            if record:
+                kwargs["record"] = str(path.with_suffix(""))
+            jobs.append(GridJob(path, closed_loop_in_world, (source, seed, policy, variant, estimator), kwargs))
         run_grid(jobs, write=write, scheduler=scheduler, workers=workers, progress=progress,
                  desc="closed-loop runs")
         return write_search_outputs(out, figures=figures, world=world)

@@ -220,7 +220,7 @@ def _tour_plan(tour):
 def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", variant: str = "semantics+rooms",
                     estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
                     search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
-                    world_spec=None) -> SearchRun:
+                    world_spec=None, recorder=None) -> SearchRun:
     """Run one closed-loop search in the simulated house.
 
     Parameters
@@ -244,6 +244,9 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         (:func:`psgsl_pgm.load_world`); default: the embedded house, :func:`psgsl_pgm.sim.default_world` — the
         validation experiment's own setting. A world file's ``start`` (or, when it names none, its default start,
         :meth:`WorldSpec.start_for`) replaces ``search.start``.
+    recorder : psgsl_pgm.experiment._record.EpisodeRecorder, optional, keyword-only
+        Logs the readings, frames, every variant's posterior and each chosen pose (``--record``); the run itself
+        is unchanged.
 
     Returns
     -------
@@ -258,6 +261,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
+    if recorder is not None:
+        world = recorder.watch(world)
     house = world.house
     # a world file's start (its own default when it names none: the navigable cell nearest the map's centre, as
     # `world check` measures from); the embedded house: the search settings' start
@@ -308,6 +313,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         rec["region_area"].append(float(region.sum()) * cell_area)
         rec["region_hit"].append(bool(region.ravel()[truth_cell]))
         rec["hpd_level"].append(hpd_level(post, truth_cell))
+        if recorder is not None:
+            recorder.step(beliefs.posteriors(VARIANTS), beliefs)
         return post
 
     start = space.position(start_cell)
@@ -340,6 +347,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             stop, drive, headings = seg[-1], dec.drive, dec.headings
             turn = config.turn_time * abs(float(np.angle(np.exp(1j * (headings[0] - heading))))) / (np.pi / 2)
             cell = dec.cell
+        if recorder is not None:
+            recorder.choose((stop[0], stop[1], headings[0]))
         # found on the way?
         hits_on_path = near(seg)
         if hits_on_path.any() and (misses is None or misses.random() >= search.miss_probability):

@@ -1,0 +1,127 @@
+"""``psgsl replay``: --list, a replay's outputs, bad bags as one line + exit 2 with nothing written; the ros extra
+is needed only there (and by --record)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import psgsl_pgm.cli._main as cli
+
+pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
+
+from tests.ros.bags import episode_bag
+
+
+def _error_line(capsys):
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith("psgsl replay: error: "), lines[0]
+    return lines[0]
+
+
+def test_list_names_topics_types_counts_and_roles(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag")
+    assert cli.main(["replay", str(bag), "--list"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    rows = {line.split()[0]: line.split()[1:] for line in out[1:]}
+    assert rows["/gas"] == ["olfaction_msgs/msg/GasSensor", "10", "gas"]
+    assert rows["/tf"] == ["tf2_msgs/msg/TFMessage", "10", "pose"]
+    assert rows["/wind"] == ["geometry_msgs/msg/Vector3Stamped", "10", "wind"]
+    assert rows["/anemometer"] == ["olfaction_msgs/msg/Anemometer", "10", "-"]
+    assert rows["/detections"] == ["vision_msgs/msg/Detection3DArray", "4", "detections"]
+    assert rows["/map"] == ["nav_msgs/msg/OccupancyGrid", "1", "map"]
+
+
+def test_replay_writes_one_runs_outputs(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag", "sqlite3")
+    out = tmp_path / "out"
+    assert cli.main(["replay", str(bag), "--source", "6.0,6.0", "--topics", "wind=/anemometer", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "10 gas readings (5 hits at >= 1 ppm), 4 detection frames" in text
+    assert "wind=/anemometer" in text
+    names = {p.name for p in out.iterdir()}
+    assert names == {"run.npz", "metrics.csv", "summary.json", "posterior-olfaction.npy", "posterior-semantics.npy",
+                     "posterior-semantics+rooms.npy", "posterior.png", "error-chart.png"}
+    final = np.load(out / "posterior-semantics.npy")
+    assert final.shape == (120, 100) and abs(final.sum() - 1) < 1e-12
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["steps"] == 10 and summary["frames"] == 4 and summary["skipped_detections"] == 0
+
+
+def test_threshold_option_changes_the_hits(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag")
+    assert cli.main(["replay", str(bag), "--threshold", "3", "--out", str(tmp_path / "o")]) == 0
+    assert "10 gas readings (0 hits at >= 3 ppm)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--topics", "gas=/nope"], "topic /nope (given for gas) is not in the bag"),
+    (["--tolerance", "-1"], "tolerance must be a non-negative number of seconds, got -1.0"),
+    (["--threshold", "0"], "threshold must be a positive number of ppm, got 0.0"),
+])
+def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, args, message):
+    bag = episode_bag(tmp_path / "bag")
+    out = tmp_path / "out"
+    assert cli.main(["replay", str(bag), *args, "--out", str(out)]) == 2
+    assert message in _error_line(capsys)
+    assert not out.exists()
+
+
+def test_truncated_bag_on_the_command_line(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag")
+    (f,) = bag.glob("*.mcap")
+    f.write_bytes(f.read_bytes()[:2000])
+    assert cli.main(["replay", str(bag), "--out", str(tmp_path / "out")]) == 2
+    assert str(bag) in _error_line(capsys)
+    assert not (tmp_path / "out").exists()
+
+
+def test_out_is_required_without_list(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag")
+    assert cli.main(["replay", str(bag)]) == 2
+    assert "--out is required" in _error_line(capsys)
+
+
+def test_the_extra_is_named_when_missing(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "rosbags", None)  # as if not installed
+    monkeypatch.setitem(sys.modules, "rosbags.rosbag2", None)
+    assert cli.main(["replay", str(tmp_path), "--list"]) == 2
+    assert 'the "ros" extra): pip install "psgsl-pgm[ros]"' in _error_line(capsys)
+    assert cli.main(["experiment", "--record", "--seeds", "1", "--stops", "1", "--out", str(tmp_path / "e")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("psgsl experiment: error: --record: ") and "psgsl-pgm[ros]" in err
+    assert not (tmp_path / "e").exists()
+
+
+def test_core_and_simulator_never_import_the_ros_packages():
+    code = ("import sys, psgsl_pgm, psgsl_pgm.sim, psgsl_pgm.experiment, psgsl_pgm.search, psgsl_pgm.ros, "
+            "psgsl_pgm.cli._main; bad = sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('rosbags', 'mcap', 'foxglove')); print(bad); sys.exit(1 if bad else 0)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert res.returncode == 0, res.stdout + res.stderr
+
+
+@pytest.mark.parametrize("command, module, function", [
+    (["experiment", "--sources", "oven", "--seeds", "1"], "psgsl_pgm.experiment", "run_experiment"),
+    (["search", "--sources", "oven", "--seeds", "1", "--no-figures"], "psgsl_pgm.search._grid", "run_search_grid"),
+])
+def test_record_reaches_the_grid(monkeypatch, tmp_path, command, module, function):
+    """--record is handed to the grid (which writes the episodes; tests/ros/test_ros_record.py); without it, not."""
+    import importlib
+
+    seen = []
+
+    def fake(*args, **kwargs):
+        seen.append(kwargs.get("record"))
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(importlib.import_module(module), function, fake)
+    for extra, want in (([], False), (["--record"], True)):
+        assert cli.main([*command, *extra, "--out", str(tmp_path / "o")]) == 2
+        assert seen[-1] is want
