@@ -11,6 +11,7 @@ from ._summary import aligned
 __all__ = ["plot_error_chart", "plot_progression", "plot_room_types"]
 
 _COLOURS = {"olfaction": "tab:grey", "semantics": "tab:blue", "semantics+rooms": "tab:orange"}
+_STYLES = {"olfaction": "-", "semantics": "-", "semantics+rooms": "--"}
 
 
 def _prob_map(ax, house, p, title, norm):
@@ -46,25 +47,30 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
     err = aligned(runs, "error", grid).mean(axis=0)
     spr = aligned(runs, "spread", grid).mean(axis=0)
     minutes = np.mean([r.time[-1] for r in runs]) / 60
-    for v, name in enumerate(VARIANTS):
+    for v, name in enumerate(VARIANTS):  # bands first, as outlines over a faint fill, so that none hides a curve
         c = _COLOURS[name]
-        ax.plot(grid, err[:, v], color=c, lw=1.8, label=name)
-        ax.fill_between(grid, np.maximum(err[:, v] - spr[:, v], 0), err[:, v] + spr[:, v], color=c, alpha=0.15)
+        low, high = np.maximum(err[:, v] - spr[:, v], 0), err[:, v] + spr[:, v]
+        ax.fill_between(grid, low, high, color=c, alpha=0.07, lw=0, zorder=1)
+        for edge in (low, high):
+            ax.plot(grid, edge, color=c, lw=0.8, ls=":", zorder=2)
+    for v, name in enumerate(VARIANTS):  # the means on top; dashed where two variants may coincide
+        ax.plot(grid, err[:, v], color=_COLOURS[name], lw=1.8, ls=_STYLES[name], label=name, zorder=3)
     ax.set_xlabel(f"fraction of the search (tour of ≈ {minutes:.0f} min)")
     ax.set_ylabel("‖E[s] − s_true‖  (m)")
     ax.set_xlim(0, 1)
     ax.set_ylim(bottom=0)
-    ax.set_title(f"Source error, mean over {len(runs)} runs; bands ± std of p(s | ·)", fontsize=10)
+    ax.set_title(f"Source error, mean over {len(runs)} runs; dotted bands: ± the spread of p(s | ·)", fontsize=10)
     ax.legend(frameon=False)
     ax.grid(alpha=0.3)
     return fig
 
 
-def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+rooms"), dynamic_range=1e4):
+def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+rooms"), dynamic_range=1e4,
+                     scale="figure"):
     """Fig. progression: the source distribution at the snapshot steps of ``run``, with the robot path.
 
-    One colour scale per row (variant), shared by all its snapshots and shown by the row's colour bar. The
-    scale is logarithmic: as the search proceeds the mass concentrates on a few cells (at the end of an oven
+    One colour scale for the whole figure (``scale="figure"``: rows are compared with each other, one colour
+    bar), or one per row (``scale="row"``, a colour bar per variant). The scale is logarithmic: as the search proceeds the mass concentrates on a few cells (at the end of an oven
     search ten cells can hold 90 % of it), and a linear scale would show the earlier, flatter snapshots of
     the same row as blank. Cells below ``max / dynamic_range`` get the lowest colour.
 
@@ -79,7 +85,9 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
     variants : sequence of str, keyword-only
         Rows of the figure.
     dynamic_range : float, default 1e4, keyword-only
-        Decades shown by each row's log scale (vmin = vmax / dynamic_range).
+        Decades shown by the log scale (vmin = vmax / dynamic_range).
+    scale : {"figure", "row"}, keyword-only
+        One colour scale for all panels, or one per row.
 
     Returns
     -------
@@ -90,13 +98,18 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
     steps = sorted(run.snapshots)
     if not steps:
         raise ValueError("the run has no snapshots: call run_search(..., snapshot_at=[...])")
+    if scale not in ("figure", "row"):
+        raise ValueError(f"scale must be 'figure' or 'row', got {scale!r}")
     fig, axes = plt.subplots(len(variants), len(steps), figsize=(2.3 * len(steps) + 1.2, 2.9 * len(variants)),
                              squeeze=False, layout="constrained", sharex=True, sharey=True)
     n = run.n_steps
     free = ~house.grid.occupancy
+    shared = map_norm(*(run.snapshots[s][VARIANTS.index(name)][free] for s in steps for name in variants), log=True,
+                      dynamic_range=dynamic_range)
     for i, name in enumerate(variants):
         v = VARIANTS.index(name)
-        norm = map_norm(*(run.snapshots[s][v][free] for s in steps), log=True, dynamic_range=dynamic_range)
+        norm = shared if scale == "figure" else map_norm(*(run.snapshots[s][v][free] for s in steps), log=True,
+                                                         dynamic_range=dynamic_range)
         for j, s in enumerate(steps):
             ax = axes[i, j]
             im = _prob_map(ax, house, np.maximum(run.snapshots[s][v], norm.vmin), f"{name}, {100 * s / n:.0f} %",
@@ -110,7 +123,10 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
                 ax.set_xlabel("")
             if j > 0:
                 ax.set_ylabel("")
-        fig.colorbar(im, ax=list(axes[i]), shrink=0.9, label=f"p(s_c | ·), {name} (log)")
+        if scale == "row":
+            fig.colorbar(im, ax=list(axes[i]), shrink=0.9, label=f"p(s_c | ·), {name} (log)")
+    if scale == "figure":
+        fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.6, label="p(s_c | ·) per cell (log; one scale for all)")
     fig.suptitle("p(s | ·) during the search (dashed: robot path; white dot: robot; star: true source)",
                  fontsize=10)
     return fig

@@ -164,7 +164,7 @@ def plot_cell_map(values, *, house=None, grid=None, ax=None, title=None, cmap="v
     if g is not None and walls:
         draw_walls(ax, g)
     if objects:
-        _label_objects(ax, house, colour="white")
+        _label_objects(ax, house)  # black on the white backing (white text on it could not be read)
     _label_axes(ax, g)
     if colorbar:
         ax.figure.colorbar(image, ax=ax, shrink=0.8, label=label)

@@ -115,12 +115,19 @@ def test_experiment_figures(house):
     run = _fake_run(house)
     tour = SimpleNamespace(path=np.column_stack([np.linspace(1, 5, 20), np.full(20, 3.0)]),
                            path_index=np.arange(0, 20, 2))
-    fig = plot_progression(run, house, tour, variants=("olfaction", "semantics", "semantics+rooms"))
+    fig = plot_progression(run, house, tour, variants=("olfaction", "semantics", "semantics+rooms"), scale="row")
     assert figure_problems(fig) == []
     for row in np.asarray(fig.axes[:9]).reshape(3, 3):  # one colour scale per row, shared by its panels
         assert len({id(ax.images[0].norm) for ax in row}) == 1
+    assert len({id(ax.images[0].norm) for ax in fig.axes[:9]}) == 3
     bars = [ax for ax in fig.axes[9:]]
     assert len(bars) == 3 and all("log" in b.get_ylabel() for b in bars)
+    fig = plot_progression(run, house, tour, variants=("olfaction", "semantics", "semantics+rooms"))
+    assert figure_problems(fig) == []
+    assert len({id(ax.images[0].norm) for ax in fig.axes[:9]}) == 1  # rows are compared: one scale for all
+    assert len(fig.axes) == 10 and "log" in fig.axes[9].get_ylabel()  # and one colour bar
+    with pytest.raises(ValueError, match="scale"):
+        plot_progression(run, house, tour, scale="column")
     fig = plot_room_types(run.snapshots[0][1], run.snapshots[0][2], house, source=run.source_xy)
     assert figure_problems(fig) == []
     assert fig.axes[0].images[0].norm is fig.axes[1].images[0].norm  # (A) and (B) on one scale
