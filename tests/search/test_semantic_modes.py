@@ -69,7 +69,7 @@ def test_needs_a_semantic_variant(house_space):
 
 def test_closed_loop_visits_the_modes_and_finds_the_oven():
     """In the embedded house the oven is the mode of p(s | z) for smoke with the room map: semantics alone finds
-    it on seed 0 within about a minute (64 s measured), and its path never depends on the gas readings."""
+    it on seed 0 within about a minute (64 s measured)."""
     from psgsl_pgm.search import SearchConfig, run_closed_loop
 
     run = run_closed_loop("oven", 0, "semantic-modes", "semantics+rooms", search=SearchConfig(time_budget=150.0))
