@@ -93,7 +93,8 @@ class GeneratedHouse:
         Parameters
         ----------
         ontology : psgsl_pgm.Ontology, optional
-            The robot's ontology; default :func:`generated_ontology` (the generator's reference houses).
+            The robot's ontology; default :func:`generated_ontology` (the generator's reference houses). Its
+            p(o | room) is kept for the room types this house has (a world file lists no other room).
         gas : str, keyword-only
         sources : dict, optional, keyword-only
             Name -> object class or (x, y), as a world file's ``sources``.
@@ -101,7 +102,7 @@ class GeneratedHouse:
         from ._generated_ontology import generated_ontology
         from ._worldfile import WorldSpec, _check_positions, _load_sources
 
-        ontology = generated_ontology() if ontology is None else ontology
+        ontology = _rooms_present(generated_ontology() if ontology is None else ontology, self.house.room_names)
         if gas not in ontology.gases:
             raise ValueError(f"gas must be a gas of the ontology {list(ontology.gases)}, got {gas!r}")
         where = f"generated house {self.seed}"
@@ -129,7 +130,7 @@ class GeneratedHouse:
         """
         from ._generated_ontology import generated_ontology
 
-        ontology = generated_ontology() if ontology is None else ontology
+        ontology = _rooms_present(generated_ontology() if ontology is None else ontology, self.house.room_names)
         self.world(ontology, gas=gas, sources=sources)  # the same checks as a loaded world, before writing
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
@@ -155,6 +156,21 @@ class GeneratedHouse:
         path = folder / name
         _atomic_text(path, header + yaml.safe_dump(world, sort_keys=False))
         return path
+
+
+def _rooms_present(ontology, names):
+    """``ontology`` with p(o | room) only for the room types the house has (a world file's rule: every room of
+    the table must be a room of the map)."""
+    from ..core._ontology import Ontology
+    from ._classes import match_names
+
+    if not ontology.rooms:
+        return ontology
+    keep = [i for i, j in enumerate(match_names(ontology.rooms, names)) if j >= 0]
+    if len(keep) == len(ontology.rooms):
+        return ontology
+    return Ontology(ontology.classes, ontology.gases, ontology.source_table, ontology.class_prior,
+                    rooms=[ontology.rooms[i] for i in keep], room_table=ontology.room_table[keep] if keep else None)
 
 
 def _atomic_text(path: Path, text: str) -> None:

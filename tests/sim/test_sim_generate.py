@@ -112,6 +112,17 @@ def test_every_object_is_findable_by_the_search_rule(houses):
         assert len(res) == len(g.house.objects) and all(r["findable"] for r in res.values())
 
 
+def test_a_house_without_some_room_types_loads_with_their_rows_left_out(tmp_path):
+    g = generate_house(0)  # four rooms: no hallway
+    assert "Hallway" not in g.house.room_names
+    w = load_world(g.write(tmp_path / "h0"))
+    assert set(w.ontology.rooms) == set(g.house.room_names)
+    ont = generated_ontology()
+    for r in w.ontology.rooms:
+        np.testing.assert_allclose(w.ontology.room_table[w.ontology.rooms.index(r)],
+                                   ont.room_table[ont.rooms.index(r)], rtol=1e-12)
+
+
 def test_world_file_round_trip(tmp_path):
     g = generate_house(2)
     src = {"toilet": [float(v) for v in g.house.objects_of_class("toilet")[0].center]}
