@@ -17,7 +17,7 @@ import os
 import sys
 from pathlib import Path
 
-from . import _export, _search, _world
+from . import _benchmark, _export, _search, _world
 from ._grid import (
     MAX_SEEDS,
     MAX_WORKERS,
@@ -274,6 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
     _world.add_parser(sub)
     _export.add_parser(sub)
     _search.add_parser(sub)
+    _benchmark.add_parser(sub)
     return parser
 
 
