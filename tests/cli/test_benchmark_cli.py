@@ -90,7 +90,7 @@ def test_tiny_benchmark_report_primary_ratio_and_resume(tmp_path, capsys):
     assert json.loads((out / "summary.json").read_text())["primary"] == summary["primary"]
     # another budget is another benchmark: refused before anything runs, naming the setting
     capsys.readouterr()
-    assert main(argv[:-6] + ["--budget", "50", "--workers", "1", "--quiet", "--out", str(out)]) == 2
+    assert main(argv[:-7] + ["--budget", "50", "--workers", "1", "--quiet", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "search.time_budget" in err and len(err.strip().splitlines()) == 1
     assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
