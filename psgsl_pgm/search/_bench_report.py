@@ -49,7 +49,8 @@ def _table(out: Path, settings: dict) -> list:
             if c in settings["conditions"]:
                 rows.append({"house": b["house"], "seed": r.seed, "condition": c, "arm": arm, "found": bool(r.found),
                              "t": min(float(r.time_to_find), settings["budget"]), "kind": b["episode"]["kind"],
-                             "class": b["episode"]["class"], "gas": b["episode"]["gas"]})
+                             "class": b["episode"]["class"], "gas": b["episode"]["gas"],
+                             "cpu": b.get("cpu_seconds")})
     return rows
 
 
@@ -73,7 +74,12 @@ def _arm_stats(rows, tau: float) -> dict:
     return {"n": len(rows), "houses": boot["groups"],
             "success_rate": {"value": float(found.mean()), "ci95": wilson_interval(int(found.sum()), len(rows))},
             "rmst": {"value": boot["value"], "ci95": boot["ci95"], "tau": tau, "interval": boot["interval"]},
-            "median": km_median(km), "km": km}
+            "median": km_median(km), "km": km, "cpu_seconds": _mean_cpu(rows)}
+
+
+def _mean_cpu(rows):
+    cpu = [r["cpu"] for r in rows if r["cpu"] is not None]
+    return float(np.mean(cpu)) if cpu else None
 
 
 def _paired(rows_a, rows_b):
@@ -184,13 +190,15 @@ def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, ve
               "classes per house (a derangement); no rooms: no p(o | room). `tour` and the `olfaction` variant do "
               "not read the ontology: their runs are shared by every condition.", ""]
     for c, arms in stats.items():
-        lines += [f"## {c}", "", "| arm | n | houses | success [95 % CI] | RMST(τ) s [95 % CI] | KM median s |",
-                  "|---|---|---|---|---|---|"]
+        lines += [f"## {c}", "", "| arm | n | houses | success [95 % CI] | RMST(τ) s [95 % CI] | KM median s | "
+                  "CPU s/run |", "|---|---|---|---|---|---|---|"]
         for arm, d in arms.items():
             sr = d["success_rate"]
             med = "—" if d["median"] is None else f"{d['median']:.1f}"
+            cpu = "—" if d["cpu_seconds"] is None else f"{d['cpu_seconds']:.1f}"
             lines.append(f"| {arm} | {d['n']} | {d['houses']} | {100 * sr['value']:.0f} % "
-                         f"[{100 * sr['ci95'][0]:.0f}, {100 * sr['ci95'][1]:.0f}] | {_fmt_ci(d['rmst'])} | {med} |")
+                         f"[{100 * sr['ci95'][0]:.0f}, {100 * sr['ci95'][1]:.0f}] | {_fmt_ci(d['rmst'])} | {med} | "
+                         f"{cpu} |")
         lines.append("")
     kinds: dict = {}
     for e in episodes.values():
