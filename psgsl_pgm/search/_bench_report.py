@@ -130,20 +130,21 @@ def _figures(out: Path, stats: dict, conditions) -> list:
     import matplotlib.pyplot as plt
 
     files = []
+    arms = sorted(dict.fromkeys(a for c in conditions for a in stats[c]), key=_arm_order)
+    colour = {a: f"C{i % 10}" for i, a in enumerate(arms)}  # one colour per arm in every panel
     fig, axes = plt.subplots(1, len(conditions), figsize=(5 * len(conditions), 4), squeeze=False, sharey=True)
     for ax, c in zip(axes[0], conditions):
         for arm, s in stats[c].items():
-            ax.step(s["km"]["t"], s["km"]["survival"], where="post", label=arm)
+            ax.step(s["km"]["t"], s["km"]["survival"], where="post", label=arm, color=colour[arm])
         ax.set_title(c)
         ax.set_xlabel("time (s)")
         ax.set_ylim(0, 1.02)
     axes[0][0].set_ylabel("P(not found by t)")
-    axes[0][-1].legend(fontsize=7, loc="upper right")
+    axes[0][0].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(out / "survival.png", dpi=110)
     plt.close(fig)
     files.append("survival.png")
-    arms = list(dict.fromkeys(a for c in conditions for a in stats[c]))
     fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(arms)), 4))
     width = 0.8 / len(conditions)
     for j, c in enumerate(conditions):
