@@ -75,3 +75,13 @@ def test_closed_loop_visits_the_modes_and_finds_the_oven():
     run = run_closed_loop("oven", 0, "semantic-modes", "semantics+rooms", search=SearchConfig(time_budget=150.0))
     assert run.found and run.time_to_find < 100.0
     assert run.n_steps >= 2  # the look-around, then at least one move towards a mode
+
+
+def test_search_grid_leaves_out_semantics_alone_without_semantics(tmp_path):
+    from psgsl_pgm.search import run_search_grid
+
+    with pytest.raises(ValueError, match="needs a semantic variant"):
+        run_search_grid(policies=("semantic-modes",), variants=("olfaction",), seeds=[0], out=tmp_path / "g")
+    with pytest.raises(ValueError, match="needs a semantic variant"):
+        run_search_grid(grid=[("oven", "semantic-modes", "olfaction", "infotaxis", 0)], out=tmp_path / "g")
+    assert not (tmp_path / "g").exists()
