@@ -118,7 +118,7 @@ def _comparisons(rows, conditions) -> dict:
 
 def _fmt_ci(d, unit="", digits=1):
     if d is None:
-        return "not run"
+        return "n/a (an arm not run, or fewer than 2 paired episodes)"
     lo, hi = d["ci95"]
     return f"{d['value']:.{digits}f}{unit} [{lo:.{digits}f}, {hi:.{digits}f}]"
 
