@@ -3,8 +3,9 @@ costs of off-ontology sources and of a wrong or room-less ontology (``report.md`
 
 Times to find are censored at the budget τ; every run is observed until it finds the source or τ, so the
 restricted mean RMST(τ) of an arm is the mean of min(T, τ) over its episodes (:func:`psgsl_pgm.search.rmst`).
-Intervals are :func:`psgsl_pgm.search._survival.nested_bootstrap` over houses, then the seeds within each drawn
-house; a ratio of two arms is computed on the same resampled episodes (the arms are paired by episode).
+Intervals (RMST, success rate, ratios) are :func:`psgsl_pgm.search._survival.nested_bootstrap` over houses, then
+the seeds within each drawn house; a ratio of two arms is computed on the same resampled episodes (the arms are
+paired by episode). ``summary.json`` also gives the success rate's Wilson interval (episodes as independent).
 
 **The primary comparison, declared before any run:** RMST(τ) of ``infotaxis`` with ``semantics+rooms`` divided by
 RMST(τ) of ``infotaxis`` with ``olfaction`` alone, ``right-ontology``, over all episodes, with its 95 % interval
@@ -70,9 +71,12 @@ def _arm_stats(rows, tau: float) -> dict:
     t = np.array([r["t"] for r in rows])
     found = np.array([r["found"] for r in rows])
     km = kaplan_meier(t, found)
-    boot = nested_bootstrap(t, [r["house"] for r in rows])
+    houses = [r["house"] for r in rows]
+    boot = nested_bootstrap(t, houses)
+    success = nested_bootstrap(found.astype(np.float64), houses)
     return {"n": len(rows), "houses": boot["groups"],
-            "success_rate": {"value": float(found.mean()), "ci95": wilson_interval(int(found.sum()), len(rows))},
+            "success_rate": {"value": success["value"], "ci95": success["ci95"],
+                             "wilson95": wilson_interval(int(found.sum()), len(rows))},
             "rmst": {"value": boot["value"], "ci95": boot["ci95"], "tau": tau, "interval": boot["interval"]},
             "median": km_median(km), "km": km, "cpu_seconds": _mean_cpu(rows)}
 

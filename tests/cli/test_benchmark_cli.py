@@ -74,6 +74,11 @@ def test_tiny_benchmark_report_primary_ratio_and_resume(tmp_path, capsys):
     assert prim["n"] == 4 and prim["houses"] == 2 and prim["ci95"][0] <= prim["value"] <= prim["ci95"][1]
     arm = summary["arms"]["wrong-ontology"]["infotaxis/semantics+rooms"]
     assert arm["rmst"]["value"] == pytest.approx(capped("infotaxis__semantics+rooms", "wrong-ontology").mean(), rel=1e-12)
+    found = [load_search_run(out / "runs" / f"h{h:05d}__wrong-ontology__infotaxis__semantics+rooms__infotaxis__seed{s}.npz")
+             .found for h in (0, 1) for s in (0, 1)]
+    assert arm["success_rate"]["value"] == pytest.approx(np.mean(found), rel=1e-12)
+    lo, hi = arm["success_rate"]["ci95"]
+    assert 0.0 <= lo <= arm["success_rate"]["value"] <= hi <= 1.0
     shared = summary["arms"]["wrong-ontology"]["infotaxis/olfaction"]
     assert shared["rmst"]["value"] == pytest.approx(b.mean(), rel=1e-12)  # shared with right-ontology
     cost = summary["costs"]["infotaxis/semantics+rooms: RMST wrong-ontology / right-ontology"]
