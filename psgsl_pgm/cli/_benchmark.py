@@ -123,6 +123,7 @@ def _run(args) -> int:
         print(f"primary: RMST ratio {summary['primary']['A']} / {summary['primary']['B']} "
               f"({summary['primary']['condition']}) = {p['value']:.3f} [{lo:.3f}, {hi:.3f}] (95 % nested bootstrap, "
               f"n = {p['n']} episodes in {p['houses']} houses)")
-    print(f"written to {args.out}: report.md, summary.json, survival.png, rmst.png, episodes.json, houses/, "
-          "worlds/, runs/")
+    houses = "" if args.world is not None else "houses/, "
+    print(f"written to {args.out}: report.md, summary.json, survival.png, rmst.png, episodes.json, {houses}worlds/, "
+          "runs/")
     return 0

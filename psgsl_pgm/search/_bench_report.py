@@ -173,7 +173,7 @@ def _figures(out: Path, stats: dict, conditions) -> list:
 
 def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, version: str) -> str:
     s = settings
-    title = "lab world " + s["world"] if s["world"] else f"{len(s['houses'])} generated homes"
+    title = "world file " + s["world"] if s["world"] else f"{len(s['houses'])} generated homes"
     lines = [f"# psgsl benchmark: {title}", ""]
     if s.get("command"):
         lines += [f"Command: `{s['command']}`", ""]
@@ -182,7 +182,8 @@ def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, ve
               f"estimator {s['estimator']}; gases {', '.join(s['gases'])}; off-ontology rate {s['off_rate']:g}.",
               "", "## Primary comparison (declared before the runs)", "",
               f"{PRIMARY['statistic']}, A = `{PRIMARY['A']}`, B = `{PRIMARY['B']}`, condition `{PRIMARY['condition']}`, "
-              "all episodes; 95 % nested percentile bootstrap (houses, then seeds within a house), paired by episode. "
+              "all episodes; 95 % nested percentile bootstrap (houses, then seeds within a house; one world file: "
+              "seeds), paired by episode. "
               "Below 1: A finds sources sooner.", ""]
     p = comp["primary"]
     lines += [f"**{_fmt_ci(p, digits=3)}**" + (f" (n = {p['n']} episodes in {p['houses']} houses; RMST A "

@@ -24,7 +24,7 @@ def test_benchmark_on_the_lab_house(tmp_path):
     # per seed: right (greedy ×2, semantic-modes) + no-rooms (greedy/semantics+rooms, semantic-modes) = 5 runs
     assert len(runs) == 2 * 5 and all(r.startswith("world__") for r in runs)
     report = (out / "report.md").read_text()
-    assert report.startswith(f"# psgsl benchmark: lab world {world.resolve()}")
+    assert report.startswith(f"# psgsl benchmark: world file {world.resolve()}")
     episodes = json.loads((out / "episodes.json").read_text())
     assert set(episodes) == {"world/0", "world/1"}
     # the no-rooms world names the lab's files and an ontology without p(o | room)
