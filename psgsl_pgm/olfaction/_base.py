@@ -226,6 +226,15 @@ class OlfactoryEstimator(abc.ABC):
         return self._post.reshape(self.geometry.shape)
 
     @property
+    def log_conditioning(self) -> np.ndarray:
+        """(H, W) float64 Σ of the log-likelihoods given to :meth:`condition` since the last :meth:`reset` (0 where
+        none; −inf where an observation ruled a cell out): the "not found" factors P(F̄ | s) in log space."""
+        n = self.geometry.shape
+        out = np.zeros(n) if self._log_other is None else self._log_other.reshape(n).copy()
+        out.flags.writeable = False
+        return out
+
+    @property
     def log_posterior(self) -> np.ndarray:
         """(H, W) float64 log p(s | g), −inf on occupied cells (read-only)."""
         return self._log_post.reshape(self.geometry.shape)

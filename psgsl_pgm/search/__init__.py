@@ -1,9 +1,13 @@
 """Closed-loop search: policies that choose where to go and where to look with φ(p) = φ_G(p) + φ_O(p)
 (Sec. "Information Gain Optimization"), the closed loop in the simulated house through the validation
-experiment's own per-step code, declarations with credible regions, and the open-space benchmark.
+experiment's own per-step code, declarations with credible regions, the open-space benchmark, and the
+many-house benchmark (:func:`run_benchmark`: generated homes, sources drawn from the ontology, three ontology
+conditions).
 """
 
+from ._benchmark import BENCHMARK_POLICIES, BENCHMARK_VARIANTS, run_benchmark
 from ._demo import DEMO_BUDGET, DEMO_SEARCH_SEEDS, run_search_demo
+from ._episodes import CONDITIONS, draw_episode, robot_ontology
 from ._detection import DetectionModel
 from ._figures import plot_paths, plot_survival
 from ._findable import check_findable, findability
@@ -14,9 +18,12 @@ from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_pr
 from ._policies import POLICIES, SCORES, Decision, Situation, choose, score_per_time, travel_time
 from ._space import FreeSpace
 from ._store import load_search_run, save_search_run
-from ._survival import holm, kaplan_meier, paired_comparison, rmst, sign_flip_pvalue
+from ._survival import holm, kaplan_meier, nested_bootstrap, paired_comparison, rmst, sign_flip_pvalue
 
 __all__ = [
+    "BENCHMARK_POLICIES",
+    "BENCHMARK_VARIANTS",
+    "CONDITIONS",
     "DEMO_BUDGET",
     "DEMO_SEARCH_SEEDS",
     "Decision",
@@ -32,6 +39,7 @@ __all__ = [
     "check_findable",
     "choose",
     "credible_region",
+    "draw_episode",
     "findability",
     "grid_size",
     "hit_probability",
@@ -39,12 +47,15 @@ __all__ = [
     "hpd_level",
     "kaplan_meier",
     "load_search_run",
+    "nested_bootstrap",
     "open_space_benchmark",
     "paired_comparison",
     "paired_difference",
     "plot_paths",
     "plot_survival",
     "rmst",
+    "robot_ontology",
+    "run_benchmark",
     "run_closed_loop",
     "run_search_demo",
     "run_search_grid",

@@ -299,15 +299,20 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     seeds = [int(s) for s in seeds]
     if not (sources and policies and variants and estimators and seeds):
         raise ValueError("need at least one source, policy, variant, estimator and seed")
-    if grid is None:
+    if grid is None:  # semantics alone has no olfaction variant: that pair is left out
         grid = [(so, p, v, e, se) for se, so, p, v, e in itertools.product(seeds, sources, policies, variants,
-                                                                           estimators)]
+                                                                           estimators)
+                if not (p == "semantic-modes" and v == "olfaction")]
+        if not grid:
+            raise ValueError("policy 'semantic-modes' needs a semantic variant; variants are ['olfaction'] only")
     else:
         grid = [(parse_source(so), p, v, e, int(se)) for so, p, v, e, se in grid]
         for _, p, v, e, _ in grid:
             if p not in POLICIES or v not in VARIANTS or e not in ESTIMATORS:
                 raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
                                  f"estimator of {ESTIMATORS}, got {(p, v, e)}")
+            if p == "semantic-modes" and v == "olfaction":
+                raise ValueError("grid entries: policy 'semantic-modes' needs a semantic variant, got 'olfaction'")
     world = None if world is None else str(Path(world).resolve())
     world_part = world_key(world)
     world_digest = digest(world_part)

@@ -229,7 +229,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         :func:`psgsl_pgm.experiment.parse_source`.
     seed : int
         World seed (house jitter, wind, gas, sensors, detector).
-    policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis"}
+    policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes"}
     variant : {"olfaction", "semantics", "semantics+rooms"}
         Which posterior the robot uses (the experiment's code path for it).
     estimator : {"infotaxis", "pmfs"}
@@ -260,6 +260,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+    if policy == "semantic-modes" and variant == "olfaction":
+        raise ValueError("policy 'semantic-modes' (semantics alone, no gas) needs a semantic variant, got 'olfaction'")
     config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
     if recorder is not None:
         world = recorder.watch(world)

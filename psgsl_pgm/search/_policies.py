@@ -53,6 +53,12 @@ moves (:meth:`FreeSpace.candidates`).
   H_h.
 * ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
   the MAP cell, with the camera towards it.
+* ``semantic-modes`` — semantics alone, no gas: drive towards the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s),
+  the variant's semantic term (eq. ``prob-semantics-final``) times the source region's prior and the "not found"
+  factors of every move so far (:attr:`OlfactoryEstimator.log_conditioning`), as ``greedy`` drives towards the
+  MAP cell, but to the drivable cell nearest the mode once it is within the horizon (not only to the lattice).
+  Once the robot has passed a mode without finding the source, the factors rule it out and the next mode becomes
+  the target: the robot visits the modes of the semantic term in turn. Needs a semantic variant.
 * ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
 """
 
@@ -67,10 +73,10 @@ from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
 
 __all__ = ["Decision", "POLICIES", "SCORES", "Situation", "check_score", "choose", "olfactory_gain", "score_per_time",
-           "travel_time"]
+           "semantic_mode", "travel_time"]
 
 #: Policies of the closed loop.
-POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis")
+POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes")
 #: Rules that turn a pose's gain G and time τ into its score (module docstring).
 SCORES = ("per-time", "gain")
 
@@ -326,20 +332,66 @@ def space_aware_gain(sit: Situation, cells):
     return v_now - (1.0 - p_f[:, None]) * expected
 
 
+def _towards(sit: Situation, target: int) -> Decision:
+    """The candidate within the horizon nearest (geodesic) to the flat cell ``target``, then the quickest, with the
+    camera towards the target (``greedy``, ``semantic-modes``)."""
+    cells, drive, pred, tau = _candidates(sit, far=False)  # towards the target, re-planned within the horizon
+    # geodesic distance from each candidate to the target cell (symmetric graph: one Dijkstra from the target's
+    # nearest drivable cell, then straight to the target cell, as FreeSpace.distances)
+    d_target = sit.space.distances(sit.space.snap(sit.space.position(target)))[cells] + sit.space.offset(target)
+    rank = np.lexsort((tau.min(axis=1), d_target))  # nearest to the target cell, then quickest
+    k = int(rank[0])
+    to = sit.space.position(target) - sit.space.position(cells[k])
+    heading = float(np.arctan2(to[1], to[0])) if np.hypot(*to) > 0 else sit.heading
+    return Decision(int(cells[k]), (heading,), sit.space.path(pred, int(cells[k])), float(drive[k]),
+                    float(-d_target[k]))
+
+
+def semantic_mode(sit: Situation) -> int:
+    """Flat index of the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s) for the situation's semantic variant (the
+    ``semantic-modes`` policy, module docstring): no gas reading enters it. First maximum on ties."""
+    if sit.variant == "olfaction":
+        raise ValueError("policy 'semantic-modes' needs a semantic variant ('semantics' or 'semantics+rooms'), "
+                         "got 'olfaction'")
+    est = sit.beliefs.estimator
+    with np.errstate(divide="ignore"):
+        score = np.log(sit.beliefs.semantic(sit.variant)) + np.log(est.prior) + est.log_conditioning
+    skip = sit.cache.get(_STUCK)
+    if skip is not None:
+        score.ravel()[skip] = -np.inf
+    return int(np.argmax(score))
+
+
+_STUCK = "semantic-modes: modes out of reach"  # Situation.cache key: flat cells no drivable cell gets closer to
+
+
+def _semantic_step(sit: Situation) -> Decision:
+    """``semantic-modes``: to the drivable cell nearest the mode when it is within the horizon (the found rule is
+    a distance to it), else towards the mode as ``greedy``. A mode that stands after the robot reached that cell
+    cannot be visited more closely: every cell whose nearest drivable cell is the robot's is set aside for the run
+    (kept in ``sit.cache``), and the next mode is the target."""
+    space = sit.space
+    for _ in range(8):  # a handful of set-asides per decision at most; then drive on regardless
+        target = semantic_mode(sit)
+        goal = space.snap(space.position(target))
+        if goal != sit.cell:
+            break
+        near = np.flatnonzero(space._nearest_nav == sit.cell)
+        sit.cache[_STUCK] = np.union1d(sit.cache.get(_STUCK, np.zeros(0, np.int64)), near)
+    dist, pred = space.reach(sit.cell, sit.horizon)
+    if goal != sit.cell and np.isfinite(dist[goal]):
+        to = space.position(target) - space.position(goal)
+        heading = float(np.arctan2(to[1], to[0])) if np.hypot(*to) > 0 else sit.heading
+        return Decision(int(goal), (heading,), space.path(pred, int(goal)), float(dist[goal]), 0.0)
+    return _towards(sit, target)
+
+
 def choose(policy: str, sit: Situation) -> Decision:
     """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
     if policy == "greedy":
-        cells, drive, pred, tau = _candidates(sit, far=False)  # towards the MAP, re-planned within the horizon
-        target = int(np.argmax(sit.posterior))  # the MAP cell
-        # geodesic distance from each candidate to the MAP cell (symmetric graph: one Dijkstra from the MAP's
-        # nearest drivable cell, then straight to the MAP cell, as FreeSpace.distances)
-        d_target = sit.space.distances(sit.space.snap(sit.space.position(target)))[cells] + sit.space.offset(target)
-        rank = np.lexsort((tau.min(axis=1), d_target))  # nearest to the MAP cell, then quickest
-        k = int(rank[0])
-        to = sit.space.position(target) - sit.space.position(cells[k])
-        heading = float(np.arctan2(to[1], to[0])) if np.hypot(*to) > 0 else sit.heading
-        return Decision(int(cells[k]), (heading,), sit.space.path(pred, int(cells[k])), float(drive[k]),
-                        float(-d_target[k]))
+        return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell
+    if policy == "semantic-modes":
+        return _semantic_step(sit)
     if policy == "infotaxis":
         cells, drive, pred, tau = _candidates(sit)
         return _best(_score(sit, infotaxis_gain(sit, cells), tau), cells, pred, drive, sit)

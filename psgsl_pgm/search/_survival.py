@@ -20,6 +20,9 @@ summarises such times the way survival analysis does:
   Carlo sample otherwise). Under the null hypothesis that the two conditions are exchangeable within a seed, each
   difference is as likely positive as negative, whatever the distribution of the capped times.
 * :func:`holm` — Holm's step-down adjustment of a table's p-values (family-wise error ≤ α).
+* :func:`nested_bootstrap` — a percentile interval for runs nested in groups (episodes in houses): resample the
+  groups with replacement, then the runs within each drawn group; any statistic of one or several paired arms
+  (an RMST, an RMST ratio).
 """
 
 from __future__ import annotations
@@ -29,8 +32,8 @@ from scipy import stats
 
 from .._shared._validate import as_float_array, describe, index, positive, unit_interval
 
-__all__ = ["EXACT_MAX", "bootstrap_mean_ci", "holm", "kaplan_meier", "km_median", "paired_comparison", "rmst",
-           "sign_flip_pvalue"]
+__all__ = ["EXACT_MAX", "bootstrap_mean_ci", "holm", "kaplan_meier", "km_median", "nested_bootstrap",
+           "nested_indices", "paired_comparison", "rmst", "sign_flip_pvalue"]
 
 #: Up to this many pairs the sign-flip test enumerates all 2^n sign vectors (65 536 for n = 16).
 EXACT_MAX = 16
@@ -266,3 +269,88 @@ def paired_comparison(times_a, times_b, tau, *, level: float = 0.95, n_resamples
     return {"value": float(d.mean()), "ci95": bootstrap_mean_ci(d, level=level, n_resamples=n_resamples, seed=seed),
             "p_value": test["p_value"], "n": int(d.size), "test": f"paired sign-flip permutation, {test['method']}",
             "interval": f"percentile bootstrap over seeds, {n_resamples} resamples, seed {seed}"}
+
+
+def nested_indices(groups, rng) -> np.ndarray:
+    """One two-stage bootstrap resample of runs nested in ``groups``: indices into the runs.
+
+    With G distinct groups of sizes n_g: draw G groups uniformly with replacement, then for each drawn group n_g
+    of its runs uniformly with replacement (the hierarchical bootstrap of Davison & Hinkley, *Bootstrap Methods
+    and their Application*, 1997, Sec. 3.8, resampling at both stages).
+
+    Parameters
+    ----------
+    groups : (n,) array_like
+        The group label of each run (any hashable values; runs of a group need not be adjacent).
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    (m,) ndarray of int
+        m = Σ over the drawn groups of their sizes.
+    """
+    labels = np.asarray(groups)
+    _, inv = np.unique(labels, return_inverse=True)
+    order = np.argsort(inv, kind="stable")  # runs sorted by group
+    sizes = np.bincount(inv)
+    starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    drawn = rng.integers(0, sizes.size, size=sizes.size)
+    counts = sizes[drawn]
+    local = np.floor(rng.random(int(counts.sum())) * np.repeat(counts, counts)).astype(np.int64)
+    return order[np.repeat(starts[drawn], counts) + local]
+
+
+def nested_bootstrap(values, groups, statistic=None, *, level: float = 0.95, n_resamples: int = 4000,
+                     seed: int = 0) -> dict:
+    """Percentile interval of a statistic of runs nested in groups (:func:`nested_indices`).
+
+    Parameters
+    ----------
+    values : (n,) or (a, n) array_like
+        One value per run (e.g. the capped time min(T, τ)), or ``a`` paired arms on the same runs (the same
+        episode under ``a`` policies): resampling keeps the pairs.
+    groups : (n,) array_like
+        The group (house) of each run.
+    statistic : callable, optional
+        ``statistic(v)`` of an array shaped like ``values`` with the runs' axis resampled -> float; default (one
+        arm only) the mean over the runs, the RMST of capped times.
+    level : float, keyword-only
+    n_resamples : int, keyword-only
+    seed : int, keyword-only
+        Seeds ``numpy.random.default_rng``.
+
+    Returns
+    -------
+    dict
+        ``{"value", "ci95", "n", "groups", "interval"}``: the statistic of the data, the (1 ± level)/2 quantiles
+        of its resampled values, the numbers of runs and groups, and how the interval was made. A statistic that
+        is not finite on some resample (a ratio over zero) is left out of the quantiles; all of them: NaN bounds.
+
+    Examples
+    --------
+    >>> r = nested_bootstrap([5.0, 5.0, 5.0, 5.0], [0, 0, 1, 1])
+    >>> r["value"], r["ci95"]
+    (5.0, [5.0, 5.0])
+    """
+    v = as_float_array(values, "values", dtype=np.float64)
+    if v.ndim not in (1, 2) or v.shape[-1] == 0 or not np.isfinite(v).all():
+        raise ValueError(f"values must be a non-empty (n,) or (arms, n) array of finite numbers, got {describe(v)}")
+    g = np.asarray(groups)
+    if g.shape != (v.shape[-1],):
+        raise ValueError(f"groups must give one group per run, shape ({v.shape[-1]},), got shape {g.shape}")
+    level = unit_interval(level, "level", low_open=True, high_open=True)
+    n_resamples = index(n_resamples, "n_resamples", minimum=1)
+    if statistic is None:
+        if v.ndim != 1:
+            raise ValueError("statistic is required for several arms (values of shape (arms, n))")
+        statistic = np.mean
+    elif not callable(statistic):
+        raise TypeError(f"statistic must be callable, got {type(statistic).__name__}")
+    rng = np.random.default_rng(index(seed, "seed"))
+    stats_ = np.array([float(statistic(v[..., nested_indices(g, rng)])) for _ in range(n_resamples)])
+    ok = stats_[np.isfinite(stats_)]
+    lo, hi = np.quantile(ok, [0.5 - level / 2, 0.5 + level / 2]) if ok.size else (np.nan, np.nan)
+    return {"value": float(statistic(v)), "ci95": [float(lo), float(hi)], "n": int(v.shape[-1]),
+            "groups": int(np.unique(g).size),
+            "interval": f"nested percentile bootstrap (groups, then runs within them), {n_resamples} resamples, "
+                        f"seed {seed}"}

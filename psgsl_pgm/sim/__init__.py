@@ -10,6 +10,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment;
+* :func:`generate_house` — generated homes (3–8 typed rooms, doors, windows, furniture per room type, wind),
+  each a world that can be written as a world file, with their ontology :func:`generated_ontology`;
 * :func:`load_world` — a user's house from a world file (map, rooms, objects, ontology, wind, sources); the
   embedded house is the world :func:`default_world`;
 * drawing — the package's one map plotter: :func:`plot_house`, :func:`plot_cell_map` (a value per cell with
@@ -26,6 +28,8 @@ from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
 from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
+from ._generate import AREA_RANGE, ROOM_RANGE, GeneratedHouse, generate_house
+from ._generated_ontology import GENERATOR_REFERENCE_SEEDS, generated_ontology
 from ._house import House, default_house, segment_mask
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
 from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
@@ -38,6 +42,7 @@ from ._world import World, make_world
 from ._worldfile import WorldSpec, default_world, load_world, navigable
 
 __all__ = [
+    "AREA_RANGE",
     "Anemometer",
     "Camera",
     "DEFAULT_CONFUSION_GROUPS",
@@ -45,6 +50,8 @@ __all__ = [
     "FilamentModel",
     "FilamentParams",
     "Frame",
+    "GENERATOR_REFERENCE_SEEDS",
+    "GeneratedHouse",
     "GasReading",
     "GasSensor",
     "GridMap",
@@ -54,6 +61,7 @@ __all__ = [
     "LineOfSightCache",
     "NOTHING",
     "OTHER",
+    "ROOM_RANGE",
     "SceneObject",
     "SemanticMap",
     "WindField",
@@ -65,6 +73,8 @@ __all__ = [
     "default_house",
     "default_world",
     "figure_problems",
+    "generate_house",
+    "generated_ontology",
     "load_objects",
     "load_world",
     "load_ros_map",

@@ -201,3 +201,21 @@ def test_pmfs_tempering_scales_the_log_score():
     np.testing.assert_allclose(b.score, a.score, rtol=1e-12)
     la, lb = a.log_posterior, b.log_posterior
     np.testing.assert_allclose(lb - lb.max(), 0.3 * (la - la.max()), rtol=1e-10, atol=1e-12)
+
+
+def test_log_conditioning_is_the_sum_of_the_not_found_factors_and_reset_forgets_it():
+    occ = np.zeros((6, 8), bool)
+    model = PlumeModel(occ, resolution=0.25, diffusivity=0.05, lifetime=20.0, encounter_scale=0.5)
+    est = GridInfotaxis.from_model(model)
+    np.testing.assert_array_equal(est.log_conditioning, np.zeros((6, 8)))
+    a = np.zeros((6, 8))
+    a[1, 2] = -np.inf
+    b = np.log(np.full((6, 8), 0.5))
+    b[4, 4] = 0.0
+    est.condition(a)
+    est.update((1.0, 1.0), True, (0.1, 0.0))
+    est.condition(b)
+    np.testing.assert_array_equal(est.log_conditioning, a + b)
+    assert not est.log_conditioning.flags.writeable
+    est.reset()
+    np.testing.assert_array_equal(est.log_conditioning, np.zeros((6, 8)))

@@ -197,3 +197,64 @@ def test_paired_difference_is_the_mean_of_differences_with_a_t_interval():
     half = stats.t.ppf(0.975, 3) * d.std(ddof=1) / 2.0
     assert out["n"] == 4 and out["mean"] == pytest.approx(d.mean(), rel=1e-15)
     np.testing.assert_allclose(out["ci95"], [d.mean() - half, d.mean() + half], rtol=1e-12)
+
+
+# --- nested bootstrap (houses, then seeds) ---------------------------------------------------------------------
+def _nested_variance(x):
+    """Exact variance of the two-stage bootstrap mean for a balanced (H, S) design: with m_h the house means,
+    σ²_h the within-house plug-in variances, Var = [Σ(m_h − m)²/H + Σσ²_h/(H S)] / H."""
+    h, s = x.shape
+    m = x.mean(axis=1)
+    return (((m - m.mean()) ** 2).mean() + x.var(axis=1).mean() / s) / h
+
+
+def test_nested_bootstrap_variance_formula_by_enumeration():
+    import itertools
+
+    x = np.array([[1.0, 4.0], [10.0, 13.5]])
+    means = []
+    for hs in itertools.product(range(2), repeat=2):  # every draw of houses, then of seeds in each: 64 outcomes
+        for ss in itertools.product(itertools.product(range(2), repeat=2), repeat=2):
+            means.append(np.mean([x[h, k] for h, pick in zip(hs, ss) for k in pick]))
+    means = np.array(means)
+    assert means.mean() == pytest.approx(x.mean(), rel=1e-12)
+    assert means.var() == pytest.approx(_nested_variance(x), rel=1e-12)
+
+
+def test_nested_indices_reproduce_the_exact_variance():
+    from psgsl_pgm.search._survival import nested_indices
+
+    rng = np.random.default_rng(3)
+    x = rng.gamma(2.0, 50.0, size=(6, 4)) + 100.0 * np.arange(6)[:, None]  # houses differ, seeds within
+    flat, groups = x.ravel(), np.repeat(np.arange(6), 4)
+    draws = np.array([flat[nested_indices(groups, rng)].mean() for _ in range(40_000)])
+    assert draws.mean() == pytest.approx(x.mean(), rel=5e-3)
+    assert draws.var() == pytest.approx(_nested_variance(x), rel=0.03)  # MC: sd of a variance ≈ √(2/N) ≈ 0.7 %
+    # ignoring the houses would give the (smaller) i.i.d. variance: the test tells them apart
+    assert flat.var() / flat.size < 0.5 * _nested_variance(x)
+
+
+def test_nested_bootstrap_groups_need_not_be_adjacent_and_keep_pairs():
+    from psgsl_pgm.search._survival import nested_bootstrap
+
+    a = np.array([10.0, 20.0, 30.0, 40.0, 50.0, 60.0])
+    groups = np.array(["h1", "h0", "h1", "h2", "h0", "h2"])
+    same = nested_bootstrap(np.stack([a, a]), groups, lambda v: v[0].mean() / v[1].mean(), n_resamples=500)
+    assert same["value"] == 1.0 and same["ci95"] == [1.0, 1.0]  # pairs stay pairs
+    half = nested_bootstrap(np.stack([a / 2, a]), groups, lambda v: v[0].mean() / v[1].mean(), n_resamples=500)
+    assert half["ci95"] == [pytest.approx(0.5, rel=1e-12)] * 2
+    r = nested_bootstrap(a, groups, n_resamples=2000, seed=1)
+    assert r["value"] == pytest.approx(35.0, rel=1e-12) and r["groups"] == 3 and r["n"] == 6
+    assert 10.0 <= r["ci95"][0] < 35.0 < r["ci95"][1] <= 60.0
+    assert r == nested_bootstrap(a, groups, n_resamples=2000, seed=1)  # seeded
+
+
+def test_nested_bootstrap_bad_input():
+    from psgsl_pgm.search._survival import nested_bootstrap
+
+    with pytest.raises(ValueError, match="groups must give one group per run"):
+        nested_bootstrap([1.0, 2.0], [0])
+    with pytest.raises(ValueError, match="values must be"):
+        nested_bootstrap([1.0, np.nan], [0, 1])
+    with pytest.raises(ValueError, match="statistic is required"):
+        nested_bootstrap([[1.0, 2.0], [1.0, 2.0]], [0, 1])

@@ -1,0 +1,129 @@
+"""``psgsl benchmark``: closed-loop searches in many generated homes (or one world file), sources drawn as they
+occur, three ontology conditions; a resumable grid and a report (``report.md``, ``summary.json``, figures)."""
+
+from __future__ import annotations
+
+import os
+import shlex
+from pathlib import Path
+
+from ._grid import (
+    MAX_SEEDS,
+    MAX_WORKERS,
+    add_found_arguments,
+    add_scheduler_argument,
+    interrupted,
+    positive_float,
+    seed_count,
+    worker_count,
+)
+
+__all__ = ["add_parser", "run"]
+
+#: More generated homes than this is months of runs on one machine.
+MAX_HOUSES = 100_000
+
+
+def _house_count(text):
+    try:
+        value = int(text)
+    except ValueError:
+        import argparse
+
+        raise argparse.ArgumentTypeError(f"expected a number of houses >= 0, got {text!r}") from None
+    if not 0 <= value <= MAX_HOUSES:
+        import argparse
+
+        raise argparse.ArgumentTypeError(f"expected a number of houses in [0, {MAX_HOUSES}], got {text!r}")
+    return value
+
+
+def add_parser(subparsers):
+    """Register ``psgsl benchmark``."""
+    from ..search._benchmark import BENCHMARK_POLICIES, BENCHMARK_VARIANTS
+    from ..search._episodes import CONDITIONS
+
+    workers = min(2, os.cpu_count() or 1)
+    p = subparsers.add_parser("benchmark", help="closed-loop search in many generated homes (or one world file): "
+                              "sources drawn from the ontology, right/wrong/no-rooms ontology, a report")
+    p.add_argument("--houses", type=_house_count, default=0,
+                   help="generated homes H: psgsl_pgm.sim.generate_house seeds N..N+H-1 (0 with --world)")
+    p.add_argument("--first-house", type=int, default=0, metavar="N", help="first house seed N (default: 0)")
+    p.add_argument("--world", default=None,
+                   help="a world file instead of generated homes (e.g. the lab's house B), reported apart")
+    p.add_argument("--seeds", type=seed_count, default=5,
+                   help=f"episodes per house S, at most {MAX_SEEDS}: seeds 0..S-1 (default: %(default)s)")
+    p.add_argument("--policies", nargs="+", default=list(BENCHMARK_POLICIES),
+                   help="closed-loop policies (default: %(default)s)")
+    p.add_argument("--variants", nargs="+", default=list(BENCHMARK_VARIANTS),
+                   help="information variants (default: %(default)s)")
+    p.add_argument("--conditions", nargs="+", default=list(CONDITIONS),
+                   help=f"ontology conditions among {', '.join(CONDITIONS)} (default: all)")
+    p.add_argument("--off-rate", type=float, default=0.1,
+                   help="probability of an off-ontology source (a free floor cell) per episode (default: %(default)s)")
+    p.add_argument("--gases", nargs="+", default=["smoke"], help="gases an episode draws from (default: smoke)")
+    p.add_argument("--budget", type=positive_float, default=1000.0,
+                   help="time budget per run, s of simulated time (default: %(default)s)")
+    p.add_argument("--rooms", type=int, default=None, metavar="N",
+                   help="rooms of every generated home, 3-8 (default: drawn per house)")
+    p.add_argument("--area", type=float, default=None, metavar="M2",
+                   help="floor area of every generated home, 40-200 m² (default: drawn per house)")
+    p.add_argument("--room-types", nargs="+", default=None, metavar="TYPE",
+                   help="room types of every generated home, one per room (Kitchen Bathroom Bedroom LivingRoom "
+                   "Hallway)")
+    add_found_arguments(p)
+    p.add_argument("--workers", type=worker_count, default=workers,
+                   help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_scheduler_argument(p)
+    p.add_argument("--out", default="psgsl-benchmark", help="output directory (default: %(default)s)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Run ``psgsl benchmark``; returns the exit code (bad input: one line on stderr, exit 2)."""
+    from ._usage import UsageError as _UsageError
+
+    try:
+        return _run(args)
+    except (ValueError, TypeError) as exc:  # the library's messages name what was expected and what arrived
+        raise _UsageError(str(exc)) from None
+
+
+def _run(args) -> int:
+    from ..io._output import check_output_dir
+    from ..runs._runner import GridInterrupted
+    from ..search import SearchConfig
+    from ..search._benchmark import run_benchmark
+
+    options = {k: v for k, v in (("n_rooms", args.rooms), ("area", args.area), ("room_types", args.room_types))
+               if v is not None}
+    if args.world is not None and options:
+        raise ValueError("--rooms, --area and --room-types shape generated homes; they do not apply with --world")
+    geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", args.clearance)) if v is not None}
+    search = SearchConfig(time_budget=args.budget, **geometry)
+    check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
+    what = args.world if args.world is not None else f"{args.houses} generated homes"
+    print(f"psgsl benchmark: {what}, {args.seeds} seeds, policies {' '.join(args.policies)}, variants "
+          f"{' '.join(args.variants)}, conditions {' '.join(args.conditions)} -> {args.out}", flush=True)
+    command = "psgsl " + " ".join(shlex.quote(a) for a in getattr(args, "argv", []))
+    try:
+        summary = run_benchmark(out=args.out, houses=args.houses, seeds=args.seeds, world=args.world,
+                                policies=args.policies, variants=args.variants, conditions=args.conditions,
+                                off_rate=args.off_rate, gases=args.gases, first_house=args.first_house,
+                                house_options=options, workers=args.workers, scheduler=args.scheduler,
+                                search=search, progress=not args.quiet, figures=not args.no_figures,
+                                command=command)
+    except GridInterrupted as exc:
+        return interrupted(args, exc, where=Path(args.out) / "runs")
+    p = summary["primary"]["result"]
+    if p is not None:
+        lo, hi = p["ci95"]
+        print(f"primary: RMST ratio {summary['primary']['A']} / {summary['primary']['B']} "
+              f"({summary['primary']['condition']}) = {p['value']:.3f} [{lo:.3f}, {hi:.3f}] (95 % nested bootstrap, "
+              f"n = {p['n']} episodes in {p['houses']} houses)")
+    houses = "" if args.world is not None else "houses/, "
+    print(f"written to {args.out}: report.md, summary.json, survival.png, rmst.png, episodes.json, {houses}worlds/, "
+          "runs/")
+    return 0

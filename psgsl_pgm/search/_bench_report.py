@@ -1,0 +1,255 @@
+"""The benchmark's report: survival per condition, RMST with intervals over houses, the primary comparison and the
+costs of off-ontology sources and of a wrong or room-less ontology (``report.md``, ``summary.json``, figures).
+
+Times to find are censored at the budget τ; every run is observed until it finds the source or τ, so the
+restricted mean RMST(τ) of an arm is the mean of min(T, τ) over its episodes (:func:`psgsl_pgm.search.rmst`).
+Intervals (RMST, success rate, ratios) are :func:`psgsl_pgm.search._survival.nested_bootstrap` over houses, then
+the seeds within each drawn house; a ratio of two arms is computed on the same resampled episodes (the arms are
+paired by episode). ``summary.json`` also gives the success rate's Wilson interval (episodes as independent).
+
+**The primary comparison, declared before any run:** RMST(τ) of ``infotaxis`` with ``semantics+rooms`` divided by
+RMST(τ) of ``infotaxis`` with ``olfaction`` alone, ``right-ontology``, over all episodes, with its 95 % interval
+(:data:`PRIMARY`). Below 1: semantics and rooms find sources sooner. Every other number is secondary.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ._metrics import wilson_interval
+from ._store import load_search_run
+from ._survival import kaplan_meier, km_median, nested_bootstrap
+
+__all__ = ["PRIMARY", "write_report"]
+
+#: The benchmark's primary comparison (module docstring): arm A over arm B in one condition.
+PRIMARY = {"condition": "right-ontology", "A": "infotaxis/semantics+rooms", "B": "infotaxis/olfaction",
+           "statistic": "RMST ratio A / B", "level": 0.95}
+_SHARED = ("olfaction",)  # variants whose runs every condition shares with right-ontology (and the tour)
+
+
+def _table(out: Path, settings: dict) -> list:
+    """Rows ``{house, seed, condition, arm, found, t, kind}`` of the stored runs the settings select; runs the
+    conditions share (tour, olfaction) appear under every condition."""
+    rows = []
+    keep_h, keep_s = set(settings["houses"]), set(settings["seeds"])
+    for f in sorted((out / "runs").glob("*.npz")):
+        r = load_search_run(f)
+        b = r.config.get("benchmark") or {}
+        if b.get("house") not in keep_h or r.seed not in keep_s or r.policy not in settings["policies"] \
+                or r.variant not in settings["variants"] or r.estimator != settings["estimator"]:
+            continue
+        conds = [b["condition"]]
+        if b["condition"] == "right-ontology" and (r.policy == "tour" or r.variant in _SHARED):
+            conds = list(settings["conditions"])
+        arm = "tour" if r.policy == "tour" else f"{r.policy}/{r.variant}"
+        for c in conds:
+            if c in settings["conditions"]:
+                rows.append({"house": b["house"], "seed": r.seed, "condition": c, "arm": arm, "found": bool(r.found),
+                             "t": min(float(r.time_to_find), settings["budget"]), "kind": b["episode"]["kind"],
+                             "class": b["episode"]["class"], "gas": b["episode"]["gas"],
+                             "cpu": b.get("cpu_seconds")})
+    return rows
+
+
+def _arm_order(arm: str):
+    from ..experiment._config import VARIANTS
+    from ._policies import POLICIES
+
+    policy, _, variant = arm.partition("/")
+    return (POLICIES.index(policy), VARIANTS.index(variant) if variant else -1)
+
+
+def _select(rows, **eq):
+    return [r for r in rows if all(r[k] == v for k, v in eq.items())]
+
+
+def _arm_stats(rows, tau: float) -> dict:
+    t = np.array([r["t"] for r in rows])
+    found = np.array([r["found"] for r in rows])
+    km = kaplan_meier(t, found)
+    houses = [r["house"] for r in rows]
+    boot = nested_bootstrap(t, houses)
+    success = nested_bootstrap(found.astype(np.float64), houses)
+    return {"n": len(rows), "houses": boot["groups"],
+            "success_rate": {"value": success["value"], "ci95": success["ci95"],
+                             "wilson95": wilson_interval(int(found.sum()), len(rows))},
+            "rmst": {"value": boot["value"], "ci95": boot["ci95"], "tau": tau, "interval": boot["interval"]},
+            "median": km_median(km), "km": km, "cpu_seconds": _mean_cpu(rows)}
+
+
+def _mean_cpu(rows):
+    cpu = [r["cpu"] for r in rows if r["cpu"] is not None]
+    return float(np.mean(cpu)) if cpu else None
+
+
+def _paired(rows_a, rows_b):
+    a = {(r["house"], r["seed"]): r for r in rows_a}
+    b = {(r["house"], r["seed"]): r for r in rows_b}
+    keys = sorted(set(a) & set(b))
+    return keys, np.array([[a[k]["t"] for k in keys], [b[k]["t"] for k in keys]])
+
+
+def _ratio(rows_a, rows_b) -> dict | None:
+    keys, v = _paired(rows_a, rows_b)
+    if len(keys) < 2 or v[1].sum() <= 0:
+        return None
+    boot = nested_bootstrap(v, [k[0] for k in keys], lambda x: x[0].mean() / x[1].mean())
+    return {"value": boot["value"], "ci95": boot["ci95"], "n": len(keys), "houses": boot["groups"],
+            "rmst_A": float(v[0].mean()), "rmst_B": float(v[1].mean()), "interval": boot["interval"]}
+
+
+def _comparisons(rows, conditions) -> dict:
+    """The primary comparison and the costs beside it."""
+    a, b, main = PRIMARY["A"], PRIMARY["B"], PRIMARY["condition"]
+    out = {"primary": None, "costs": {}}
+    right = _select(rows, condition=main)
+    out["primary"] = _ratio(_select(right, arm=a), _select(right, arm=b))
+    for kind in ("object", "off-ontology"):
+        sub = _select(right, kind=kind)
+        out["costs"][f"primary ratio, {kind} sources only"] = _ratio(_select(sub, arm=a), _select(sub, arm=b))
+    for c in conditions:
+        if c == main:
+            continue
+        rows_c = _select(rows, condition=c)
+        out["costs"][f"primary ratio under {c}"] = _ratio(_select(rows_c, arm=a), _select(rows_c, arm=b))
+        out["costs"][f"{a}: RMST {c} / {main}"] = _ratio(_select(rows_c, arm=a), _select(right, arm=a))
+    return out
+
+
+def _fmt_ci(d, unit="", digits=1):
+    if d is None:
+        return "n/a (an arm not run, or fewer than 2 paired episodes)"
+    lo, hi = d["ci95"]
+    return f"{d['value']:.{digits}f}{unit} [{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def _figures(out: Path, stats: dict, conditions) -> list:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    files = []
+    arms = sorted(dict.fromkeys(a for c in conditions for a in stats[c]), key=_arm_order)
+    colour = {a: f"C{i % 10}" for i, a in enumerate(arms)}  # one colour per arm in every panel
+    fig, axes = plt.subplots(1, len(conditions), figsize=(5 * len(conditions), 4), squeeze=False, sharey=True)
+    for ax, c in zip(axes[0], conditions):
+        for arm, s in stats[c].items():
+            ax.step(s["km"]["t"], s["km"]["survival"], where="post", label=arm, color=colour[arm])
+        ax.set_title(c)
+        ax.set_xlabel("time (s)")
+        ax.set_ylim(0, 1.02)
+    axes[0][0].set_ylabel("P(not found by t)")
+    axes[0][0].legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(out / "survival.png", dpi=110)
+    plt.close(fig)
+    files.append("survival.png")
+    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(arms)), 4))
+    width = 0.8 / len(conditions)
+    for j, c in enumerate(conditions):
+        xs, ys, lo, hi = [], [], [], []
+        for i, a in enumerate(arms):
+            if a in stats[c]:
+                r = stats[c][a]["rmst"]
+                xs.append(i + (j - (len(conditions) - 1) / 2) * width)
+                ys.append(r["value"])
+                lo.append(r["value"] - r["ci95"][0])
+                hi.append(r["ci95"][1] - r["value"])
+        ax.bar(xs, ys, width, yerr=[lo, hi], capsize=3, label=c)
+    ax.set_xticks(range(len(arms)), arms, rotation=25, ha="right", fontsize=8)
+    ax.set_ylabel("RMST(τ) (s), 95 % nested bootstrap")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "rmst.png", dpi=110)
+    plt.close(fig)
+    files.append("rmst.png")
+    return files
+
+
+def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, version: str) -> str:
+    s = settings
+    title = "world file " + s["world"] if s["world"] else f"{len(s['houses'])} generated homes"
+    lines = [f"# psgsl benchmark: {title}", ""]
+    if s.get("command"):
+        lines += [f"Command: `{s['command']}`", ""]
+    lines += [f"psgsl-pgm {version}; houses {', '.join(s['houses'][:6])}{' …' if len(s['houses']) > 6 else ''} "
+              f"({len(s['houses'])}); seeds {s['seeds'][0]}–{s['seeds'][-1]}; budget τ = {s['budget']:g} s; "
+              f"estimator {s['estimator']}; gases {', '.join(s['gases'])}; off-ontology rate {s['off_rate']:g}.",
+              "", "## Primary comparison (declared before the runs)", "",
+              f"{PRIMARY['statistic']}, A = `{PRIMARY['A']}`, B = `{PRIMARY['B']}`, condition `{PRIMARY['condition']}`, "
+              "all episodes; 95 % nested percentile bootstrap (houses, then seeds within a house; one world file: "
+              "seeds), paired by episode. "
+              "Below 1: A finds sources sooner.", ""]
+    p = comp["primary"]
+    lines += [f"**{_fmt_ci(p, digits=3)}**" + (f" (n = {p['n']} episodes in {p['houses']} houses; RMST A "
+                                                f"{p['rmst_A']:.1f} s, B {p['rmst_B']:.1f} s)" if p else ""), ""]
+    lines += ["## Costs beside it (secondary)", "", "| comparison | ratio [95 % CI] | n |", "|---|---|---|"]
+    for name, d in comp["costs"].items():
+        lines.append(f"| {name} | {_fmt_ci(d, digits=3)} | {d['n'] if d else 0} |")
+    lines += ["", "Off-ontology: the primary ratio on the episodes whose source is a floor cell no ontology class "
+              "holds, beside the ratio on object sources. Wrong ontology: p(o | s, γ) permuted among the object "
+              "classes per house (a derangement); no rooms: no p(o | room). `tour` and the `olfaction` variant do "
+              "not read the ontology: their runs are shared by every condition.", ""]
+    for c, arms in stats.items():
+        lines += [f"## {c}", "", "| arm | n | houses | success [95 % CI] | RMST(τ) s [95 % CI] | KM median s | "
+                  "CPU s/run |", "|---|---|---|---|---|---|---|"]
+        for arm, d in arms.items():
+            sr = d["success_rate"]
+            med = "—" if d["median"] is None else f"{d['median']:.1f}"
+            cpu = "—" if d["cpu_seconds"] is None else f"{d['cpu_seconds']:.1f}"
+            lines.append(f"| {arm} | {d['n']} | {d['houses']} | {100 * sr['value']:.0f} % "
+                         f"[{100 * sr['ci95'][0]:.0f}, {100 * sr['ci95'][1]:.0f}] | {_fmt_ci(d['rmst'])} | {med} | "
+                         f"{cpu} |")
+        lines.append("")
+    kinds: dict = {}
+    for e in episodes.values():
+        k = e["class"] or "off-ontology"
+        kinds[k] = kinds.get(k, 0) + 1
+    lines += ["## Episodes", "", ", ".join(f"{k} {v}" for k, v in sorted(kinds.items(), key=lambda kv: -kv[1])), ""]
+    lines += ["## Figures", ""] + [f"![{f}]({f})" for f in files] + [""]
+    return "\n".join(lines)
+
+
+def write_report(out, settings: dict, *, figures: bool = True) -> dict:
+    """Aggregate the stored runs the ``settings`` select into ``out/report.md``, ``out/summary.json`` and the
+    figures ``survival.png`` (Kaplan–Meier per condition) and ``rmst.png``; returns the summary."""
+    from .. import __version__
+    from ..io._output import write_file_atomically
+
+    out = Path(out)
+    rows = _table(out, settings)
+    if not rows:
+        raise ValueError(f"no benchmark runs stored in {out / 'runs'} for these settings")
+    tau = float(settings["budget"])
+    conditions = [c for c in settings["conditions"] if _select(rows, condition=c)]
+    stats = {}
+    for c in conditions:
+        arms = sorted(dict.fromkeys(r["arm"] for r in _select(rows, condition=c)), key=_arm_order)
+        stats[c] = {a: _arm_stats(_select(rows, condition=c, arm=a), tau) for a in arms}
+    comp = _comparisons(rows, conditions)
+    episodes = json.loads((out / "episodes.json").read_text()) if (out / "episodes.json").exists() else {}
+    episodes = {k: v for k, v in episodes.items()
+                if k.split("/")[0] in settings["houses"] and int(k.split("/")[1]) in settings["seeds"]}
+    files = _figures(out, stats, conditions) if figures else []
+    summary = {"settings": settings, "version": __version__, "primary": PRIMARY | {"result": comp["primary"]},
+               "costs": comp["costs"], "arms": stats}
+    text = json.dumps(_finite(summary), indent=1, sort_keys=True, allow_nan=False) + "\n"
+    write_file_atomically(out / "summary.json", lambda fh: fh.write(text.encode("utf-8")))
+    md = _markdown(settings, stats, comp, episodes, files, __version__)
+    write_file_atomically(out / "report.md", lambda fh: fh.write(md.encode("utf-8")))
+    return summary
+
+
+def _finite(obj):
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj

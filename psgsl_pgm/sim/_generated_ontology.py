@@ -1,0 +1,56 @@
+"""The ontology of generated homes: p(o | s, γ) by hand, p(o) and p(o | room) counted on reference houses."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from ..core._ontology import Ontology
+from ._classes import HOUSE_CLASSES, HOUSE_ROOMS
+
+__all__ = ["GENERATOR_REFERENCE_SEEDS", "generated_ontology"]
+
+#: Seeds of the generated reference houses whose floor plans give p(o) and p(o | room); a benchmark evaluates
+#: other seeds (``psgsl benchmark`` refuses these).
+GENERATOR_REFERENCE_SEEDS = tuple(range(1_000_000, 1_000_020))
+
+
+@lru_cache(maxsize=2)
+def _cached(seeds: tuple, pseudo_count: float) -> Ontology:
+    from ._generate import generate_house
+    from ._house_ontology import house_ontology
+
+    k, r = len(HOUSE_CLASSES), len(HOUSE_ROOMS)
+    counts = np.zeros((r, k))
+    for s in seeds:
+        h = generate_house(s).house
+        inside = h.room_labels >= 0
+        rows = np.array([HOUSE_ROOMS.index(n) for n in h.room_names])[h.room_labels[inside]]
+        np.add.at(counts, (rows, h.class_map[inside]), 1.0)  # cells of each class in each room type
+    room_table = (counts + pseudo_count) / (counts + pseudo_count).sum(axis=1, keepdims=True)
+    class_prior = (counts.sum(axis=0) + pseudo_count) / (counts.sum() + k * pseudo_count)
+    hand = house_ontology()  # p(o | s, γ): the hand-written table of the simulated house (house_gases.yaml)
+    return Ontology(HOUSE_CLASSES, hand.gases, hand.source_table, class_prior, rooms=HOUSE_ROOMS,
+                    room_table=room_table)
+
+
+def generated_ontology(*, reference_seeds=GENERATOR_REFERENCE_SEEDS, pseudo_count: float = 1.0) -> Ontology:
+    """The ontology a robot brings to generated homes (as :func:`psgsl_pgm.experiment.house_ontology` for the
+    embedded house).
+
+    * p(o | s, γ): the hand-written table ``psgsl_pgm/data/house_gases.yaml`` (the same as the embedded house's);
+    * p(o) = β and p(o | room): cell frequencies of each class in each room type over the generated houses of
+      ``reference_seeds`` (never evaluated), with ``pseudo_count`` cells of every class added to every room.
+
+    Returns
+    -------
+    Ontology
+        Classes :data:`psgsl_pgm.sim.HOUSE_CLASSES`, rooms :data:`psgsl_pgm.sim.HOUSE_ROOMS`.
+    """
+    seeds = tuple(int(s) for s in reference_seeds)
+    if not seeds:
+        raise ValueError("reference_seeds must name at least one reference house")
+    if not (np.isfinite(pseudo_count) and pseudo_count > 0):
+        raise ValueError(f"pseudo_count must be a positive number of cells, got {pseudo_count!r}")
+    return _cached(seeds, float(pseudo_count))

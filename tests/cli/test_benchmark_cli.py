@@ -1,0 +1,101 @@
+"""``psgsl benchmark``: a tiny benchmark end to end (runs, report, the primary ratio by hand, resume, a refused
+resume with other settings) and bad input as one line with exit code 2, nothing written."""
+
+import json
+
+import numpy as np
+import pytest
+
+from psgsl_pgm.cli._main import main
+
+
+@pytest.mark.parametrize("extra, needle", [
+    (["--conditions", "right-ontology", "sideways"], "condition must be one of"),
+    (["--rooms", "2"], "n_rooms must be in [3, 8], got 2"),
+    (["--rooms", "2", "--room-types", "Kitchen", "Bathroom", "Bedroom", "LivingRoom", "Hallway", "Bedroom",
+      "Bedroom", "Bathroom"], "n_rooms must be in [3, 8], got 2"),
+    (["--rooms", "3", "--room-types", "Kitchen", "Bathroom", "Bedroom", "LivingRoom"], "one type per room"),
+    (["--area", "-20"], "area must be in [40, 200] m², got -20"),
+    (["--rooms", "8", "--area", "50"], "per room"),
+    (["--room-types", "Kitchen", "Garage", "Bedroom"], "room_types must name types"),
+    (["--policies", "teleport"], "policies must be among"),
+    (["--variants", "smell"], "variants must be among"),
+    (["--conditions", "no-rooms"], "must include 'right-ontology'"),
+    (["--off-rate", "1.5"], "off_rate"),
+    (["--gases", "chlorine"], "gases must be gases of the ontology"),
+    (["--first-house", "1000000"], "reference seeds"),
+])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, extra, needle):
+    out = tmp_path / "b"
+    assert main(["benchmark", "--houses", "2", "--seeds", "1", "--out", str(out), "--quiet"] + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("psgsl benchmark: error: ") and needle in err[0], err
+    assert not out.exists()
+
+
+def test_world_and_houses_together_are_refused(tmp_path, capsys):
+    from psgsl_pgm.sim import generate_house
+
+    world = generate_house(1).write(tmp_path / "w")
+    out = tmp_path / "b"
+    assert main(["benchmark", "--houses", "2", "--world", str(world), "--out", str(out)]) == 2
+    assert "not both" in capsys.readouterr().err
+    assert main(["benchmark", "--world", str(world), "--rooms", "4", "--out", str(out)]) == 2
+    assert "do not apply with --world" in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_tiny_benchmark_report_primary_ratio_and_resume(tmp_path, capsys):
+    out = tmp_path / "b"
+    argv = ["benchmark", "--houses", "2", "--seeds", "2", "--rooms", "3", "--area", "45", "--policies", "infotaxis",
+            "--variants", "olfaction", "semantics+rooms", "--conditions", "right-ontology", "wrong-ontology",
+            "--budget", "40", "--workers", "1", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    runs = sorted(p.name for p in (out / "runs").iterdir())
+    # per episode: right (olfaction, semantics+rooms) + wrong (semantics+rooms; olfaction shared) = 3 runs
+    assert len(runs) == 2 * 2 * 3
+    assert not any("wrong-ontology__infotaxis__olfaction" in r for r in runs)
+    summary = json.loads((out / "summary.json").read_text())
+    report = (out / "report.md").read_text()
+    assert "## Primary comparison (declared before the runs)" in report and "psgsl benchmark --houses 2" in report
+    for name in ("survival.png", "rmst.png", "episodes.json", "houses/h00000/world.yaml", "houses/h00001/world.yaml"):
+        assert (out / name).stat().st_size > 0
+    # the primary ratio by hand from the stored runs: mean capped time of A over that of B, same episodes
+    from psgsl_pgm.search import load_search_run
+
+    def capped(policy_variant, condition="right-ontology"):
+        return np.array([min(load_search_run(out / "runs" / f"h{h:05d}__{condition}__{policy_variant}__infotaxis__seed{s}.npz")
+                             .time_to_find, 40.0) for h in (0, 1) for s in (0, 1)])
+
+    a, b = capped("infotaxis__semantics+rooms"), capped("infotaxis__olfaction")
+    prim = summary["primary"]["result"]
+    assert prim["value"] == pytest.approx(a.mean() / b.mean(), rel=1e-12)
+    assert prim["n"] == 4 and prim["houses"] == 2 and prim["ci95"][0] <= prim["value"] <= prim["ci95"][1]
+    arm = summary["arms"]["wrong-ontology"]["infotaxis/semantics+rooms"]
+    assert arm["rmst"]["value"] == pytest.approx(capped("infotaxis__semantics+rooms", "wrong-ontology").mean(), rel=1e-12)
+    found = [load_search_run(out / "runs" / f"h{h:05d}__wrong-ontology__infotaxis__semantics+rooms__infotaxis__seed{s}.npz")
+             .found for h in (0, 1) for s in (0, 1)]
+    assert arm["success_rate"]["value"] == pytest.approx(np.mean(found), rel=1e-12)
+    lo, hi = arm["success_rate"]["ci95"]
+    assert 0.0 <= lo <= arm["success_rate"]["value"] <= hi <= 1.0
+    shared = summary["arms"]["wrong-ontology"]["infotaxis/olfaction"]
+    assert shared["rmst"]["value"] == pytest.approx(b.mean(), rel=1e-12)  # shared with right-ontology
+    cost = summary["costs"]["infotaxis/semantics+rooms: RMST wrong-ontology / right-ontology"]
+    assert cost["value"] == pytest.approx(capped("infotaxis__semantics+rooms", "wrong-ontology").mean() / a.mean(),
+                                          rel=1e-12)
+    # every generated house is a world file `psgsl world check` accepts
+    capsys.readouterr()
+    assert main(["world", "check", str(out / "houses" / "h00001" / "world.yaml")]) == 0
+    assert ": OK" in capsys.readouterr().out
+    # resumed: nothing recomputed, the same report numbers
+    stamps = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    assert main(argv) == 0
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
+    assert json.loads((out / "summary.json").read_text())["primary"] == summary["primary"]
+    # another budget is another benchmark: refused before anything runs, naming the setting
+    capsys.readouterr()
+    assert main(argv[:-7] + ["--budget", "50", "--workers", "1", "--quiet", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "search.time_budget" in err and len(err.strip().splitlines()) == 1
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps

@@ -1,0 +1,34 @@
+"""``run_benchmark`` on a world file: the lab's house B (skipped without ../shared), reported apart."""
+
+import json
+
+import pytest
+
+from tests.sim.test_sim_real_house_world import SHARED, write_real_world
+
+pytestmark = [pytest.mark.shared_data, pytest.mark.slow,
+              pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/mapir_house_B is absent")]
+
+
+def test_benchmark_on_the_lab_house(tmp_path):
+    from psgsl_pgm.search import SearchConfig
+    from psgsl_pgm.search._benchmark import run_benchmark
+
+    world = write_real_world(tmp_path)
+    out = tmp_path / "b"
+    summary = run_benchmark(out=out, world=world, seeds=2, policies=("greedy", "semantic-modes"),
+                            variants=("olfaction", "semantics+rooms"), conditions=("right-ontology", "no-rooms"),
+                            search=SearchConfig(time_budget=30.0), workers=1, progress=False, figures=False)
+    assert summary["settings"]["houses"] == ["world"] and summary["settings"]["world"] == str(world.resolve())
+    runs = sorted(p.name for p in (out / "runs").iterdir())
+    # per seed: right (greedy ×2, semantic-modes) + no-rooms (greedy/semantics+rooms, semantic-modes) = 5 runs
+    assert len(runs) == 2 * 5 and all(r.startswith("world__") for r in runs)
+    report = (out / "report.md").read_text()
+    assert report.startswith(f"# psgsl benchmark: world file {world.resolve()}")
+    episodes = json.loads((out / "episodes.json").read_text())
+    assert set(episodes) == {"world/0", "world/1"}
+    # the no-rooms world names the lab's files and an ontology without p(o | room)
+    from psgsl_pgm.sim import load_world
+
+    bare = load_world(out / "worlds" / "world__no-rooms.yaml")
+    assert bare.ontology.rooms == () and bare.ontology.classes == load_world(world).ontology.classes
