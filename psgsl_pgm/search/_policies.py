@@ -140,7 +140,7 @@ def _wrap(a):
 
 
 def travel_time(drive, turn, *, speed: float, turn_time: float, sense_time: float) -> np.ndarray:
-    """τ = drive / speed + turn_time · |turn| / (π/2) + sense_time (s), broadcast over drive and turn."""
+    """τ = drive / speed + turn_time · abs(turn) / (π/2) + sense_time (s), broadcast over drive and turn."""
     return (np.asarray(drive, dtype=np.float64) / speed + turn_time * np.abs(turn) / (np.pi / 2) + sense_time)
 
 
