@@ -307,6 +307,20 @@ def _missing_reference(app, env, node, contnode):
     return None
 
 
+#: The paper's equation labels the docstrings cite (as ``label``); each links to its equation on the reference's
+#: "Paper <-> code" page.
+EQUATION_LABELS = ("decomposition-objective", "combined-conditionals", "pZcGivenSc", "prob-semantics-final")
+
+
+def _link_equations(app, what, name, obj, options, lines):
+    """``prob-semantics-final`` in a docstring becomes a link to that equation, still showing its label."""
+    import re
+
+    pattern = re.compile(r"``(" + "|".join(map(re.escape, EQUATION_LABELS)) + r")``")
+    lines[:] = [pattern.sub(r":ref:`\1 <eq-\1>`", line) for line in lines]
+
+
 def setup(app):
     app.connect("autodoc-process-docstring", _constant_doc)
+    app.connect("autodoc-process-docstring", _link_equations)
     app.connect("missing-reference", _missing_reference)

@@ -130,11 +130,14 @@ class Browser:
 
     def __init__(self, executable: str, profile: Path, *, timeout: float = 60.0):
         profile.mkdir(parents=True, exist_ok=True)
+        port_file = profile / "DevToolsActivePort"
+        port_file.unlink(missing_ok=True)  # a reused profile's file names a port of a browser that is gone
+        self._ws = None
+        self._profile = profile
         self._log = open(profile / "chromium-stderr.log", "wb")  # noqa: SIM115 - closed in close()
         self._proc = subprocess.Popen([executable, *CHROMIUM_FLAGS, f"--user-data-dir={profile}",
                                        "--remote-debugging-port=0", "about:blank"],
                                       stdout=subprocess.DEVNULL, stderr=self._log)
-        port_file = profile / "DevToolsActivePort"
         deadline = time.monotonic() + timeout
         while not (port_file.exists() and len(port_file.read_text().split()) >= 2):
             if self._proc.poll() is not None or time.monotonic() > deadline:
@@ -142,13 +145,17 @@ class Browser:
                 raise RuntimeError(f"chromium did not open its DevTools port (log: {profile / 'chromium-stderr.log'})")
             time.sleep(0.1)
         port, path = port_file.read_text().split()[:2]
-        self._ws = WebSocket(f"ws://127.0.0.1:{port}{path}", timeout=timeout)
         self._next = 0
         self.events: list[dict] = []
-        target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
-        self._session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
-        for domain in ("Page", "Runtime", "Log", "Network"):
-            self.call(f"{domain}.enable", session=True)
+        try:
+            self._ws = WebSocket(f"ws://127.0.0.1:{port}{path}", timeout=timeout)
+            target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
+            self._session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
+            for domain in ("Page", "Runtime", "Log", "Network"):
+                self.call(f"{domain}.enable", session=True)
+        except BaseException:
+            self.close()
+            raise
 
     def call(self, method: str, params: dict | None = None, *, session: bool = False, timeout: float = 60.0):
         """Send one command and return its result; events that arrive meanwhile are kept in ``events``."""
@@ -221,9 +228,9 @@ class Browser:
 
     def close(self) -> None:
         """Stop the browser this object started (by its process id) and wait for it."""
-        ws = getattr(self, "_ws", None)
-        if ws is not None:
-            ws.close()
+        if self._ws is not None:
+            self._ws.close()
+            self._ws = None
         if self._proc.poll() is None:
             self._proc.terminate()
             try:
@@ -232,3 +239,12 @@ class Browser:
                 self._proc.kill()
                 self._proc.wait(10)
         self._log.close()
+        # A browser that outlived the process started here (handed over to, or forked from it) holds this profile's
+        # lock, a link to "host-pid": stop that process too, by its id, when its command line names this profile.
+        lock = self._profile / "SingletonLock"
+        try:
+            pid = int(os.readlink(lock).rsplit("-", 1)[1])
+            if f"--user-data-dir={self._profile}" in Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0"):
+                os.kill(pid, 15)
+        except (OSError, ValueError, IndexError):
+            pass  # no lock, or its process is gone: nothing left running
