@@ -22,3 +22,15 @@ def test_readme_shows_the_two_fresh_machine_commands():
 @pytest.mark.parametrize("block", BLOCKS, ids=[f"block{i}" for i in range(len(BLOCKS))])
 def test_readme_python_block_runs(block):
     exec(compile(block, str(README), "exec"), {"__name__": "readme"})
+
+
+def test_readme_is_short_and_describes_the_software_not_its_history():
+    text = README.read_text()
+    assert len(text.splitlines()) <= 200, "README holds what a newcomer needs; the rest lives in docs/"
+    assert not re.search(r"load average|\bissue \d+|`[0-9a-f]{7,40}`", text, flags=re.I), \
+        "no load averages, issue numbers or commit hashes in user-facing text"
+
+
+def test_readme_links_point_at_files_that_exist():
+    for target in re.findall(r"\]\(((?!https?:)[^)#]+)(?:#[^)]*)?\)", README.read_text()):
+        assert (README.parent / target).exists(), f"README links to {target}, which does not exist"

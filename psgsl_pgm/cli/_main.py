@@ -3,7 +3,7 @@
 ``psgsl`` alone runs the demo. Subcommands: ``demo``, ``experiment``, ``estimate``, ``kitchen``, ``world check``,
 ``export-networks`` (each further subcommand registered from its own ``psgsl_pgm.cli._<name>`` module).
 
-Errors (README "Bad input"): every :class:`ValueError`, :class:`TypeError` and :class:`OSError` (so also
+Errors (docs/guide/bad-input.md): every :class:`ValueError`, :class:`TypeError` and :class:`OSError` (so also
 :class:`FileNotFoundError`) that a command raises — bad arguments, bad input files, an unwritable output — is
 printed by :func:`main` as ONE line ``psgsl <command>: error: <message>`` on stderr, and the exit code is 2;
 never a traceback. Output paths are checked before any work starts (:mod:`psgsl_pgm.io._output`). Subcommand
@@ -235,7 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(func=_demo)
 
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
-    exp.add_argument("--world", default=None, help="world file: your own house (see README 'Your own house'); "
+    exp.add_argument("--world", default=None, help="world file: your own house (see docs/guide/own-house.md); "
                      "default: the embedded house")
     exp.add_argument("--sources", nargs="+", default=None,
                      help="object class names, 'x,y' positions or the world file's source names (default: the "

@@ -33,7 +33,7 @@ def add_parser(subparsers):
     workers = min(2, os.cpu_count() or 1)
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
-    p.add_argument("--world", default=None, help="world file: your own house (see README 'Your own house'); "
+    p.add_argument("--world", default=None, help="world file: your own house (see docs/guide/own-house.md); "
                    "default: the embedded house")
     p.add_argument("--sources", nargs="+", default=None,
                    help="object class names, 'x,y' positions or the world file's source names (default: the "

@@ -15,7 +15,7 @@ def add_parser(subparsers) -> None:
     world = subparsers.add_parser("world", help="world files: your own house (map, rooms, objects, ontology, wind)")
     actions = world.add_subparsers(dest="world_command", required=True)
     check = actions.add_parser("check", help="validate every file and key of a world file; print a summary")
-    check.add_argument("world", help="world file (YAML; see README 'Your own house')")
+    check.add_argument("world", help="world file (YAML; see docs/guide/own-house.md)")
     check.add_argument("--png", default=None, help="also draw map, rooms, objects, windows, wind and sources here")
     check.add_argument("--seed", type=int, default=0, help="seed of the house (only the built-in house varies)")
     add_found_arguments(check)

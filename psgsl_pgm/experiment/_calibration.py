@@ -4,9 +4,9 @@ A calibration run is the fixed exploration tour in a house whose source is known
 than the evaluated ones). From its readings alone — gas hits and the anemometer, never the simulated wind
 field — :func:`calibrate` fits
 
-* the plume parameters (D, τ, κ) by maximum likelihood of the hit model (:func:`psgsl_pgm.olfaction.
-  fit_plume_parameters`), each run's plume solved with the mean wind the robot estimated from that run's
-  anemometer readings (:class:`psgsl_pgm.olfaction.MeanWindEstimator`, all of its readings);
+* the plume parameters (D, τ, κ) by maximum likelihood of the hit model
+  (:func:`~psgsl_pgm.olfaction.fit_plume_parameters`), each run's plume solved with the mean wind the robot
+  estimated from that run's anemometer readings (:class:`psgsl_pgm.olfaction.MeanWindEstimator`, all of its readings);
 * the tempering β of :class:`psgsl_pgm.olfaction.GridInfotaxis` from the lag-1 autocorrelation of the hit
   model's Pearson residuals along each run at the fitted parameters (:func:`psgsl_pgm.olfaction.ar1_tempering`:
   β = n_eff / n = (1 − ρ̂)/(1 + ρ̂));
@@ -121,8 +121,9 @@ def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig
     """Maximum-likelihood κ alone, at the D and τ of ``config``, pooled over calibration runs.
 
     With c_k = G(x_k | s_true) from each run's plume (its wind estimated from its own anemometer readings), κ
-    maximises Π_k P(g_k | κ c_k), P(hit) = ε + (1 − ε)(1 − exp(−κ c)) (:func:`psgsl_pgm.olfaction.
-    profile_log_likelihood`). :func:`calibrate` fits (D, τ, κ) jointly; this is its profile in κ at fixed (D, τ).
+    maximises Π_k P(g_k | κ c_k), P(hit) = ε + (1 − ε)(1 − exp(−κ c))
+    (:func:`~psgsl_pgm.olfaction.profile_log_likelihood`). :func:`calibrate` fits (D, τ, κ) jointly; this is its
+    profile in κ at fixed (D, τ).
 
     Returns
     -------

@@ -183,7 +183,8 @@ def stored_runs(out) -> dict:
 
 
 def write_outputs(out, *, flat: bool = False, world=None) -> dict:
-    """Aggregate every run stored in ``out/runs`` (:func:`stored_runs`) into summaries, CSV and figures.
+    """Aggregate every run stored in ``out/runs`` (:func:`~psgsl_pgm.experiment._driver.stored_runs`) into
+    summaries, CSV and figures.
 
     With ``flat=True`` (the demo: one source, one estimator) everything goes straight into ``out``; otherwise
     into ``out/<source>-<estimator>/``, plus ``out/summary.json`` and ``out/metrics.csv`` over all groups.

@@ -114,7 +114,7 @@ def hpd_level(posterior, cell) -> float:
     smallest such region holding ``cell`` is {c : p_c ≥ p_cell}, so the level is Σ_{c: p_c ≥ p_cell} p_c (over
     the total mass). Cells *tied* with ``cell`` count in full — a region holds a cell only with every cell as
     probable, so a cell of a flat posterior over m cells has level 1, not 1/m — and a tie is equality up to
-    rounding: |p_c − p_cell| ≤ max(1e-12, 8 ε) p_cell, ε the machine epsilon of the posterior's dtype (cells
+    rounding: abs(p_c − p_cell) ≤ max(1e-12, 8 ε) p_cell, ε the machine epsilon of the posterior's dtype (cells
     equal in exact arithmetic differ in their last bits after the posterior's products and sums). A calibrated
     posterior puts the true source at a level that is about uniform on [0, 1] over runs (median ½); an
     overconfident one pushes it towards 1.

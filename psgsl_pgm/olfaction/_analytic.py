@@ -65,7 +65,7 @@ def vergassola_concentration(displacement, *, wind, diffusivity: float, lifetime
     Returns
     -------
     c : (...) ndarray of float64
-        exp(w·(r − r0)/(2D)) K0(|r − r0|/λ) / (2π D); +inf at zero displacement (logarithmic singularity).
+        exp(w·(r − r0)/(2D)) K0(‖r − r0‖/λ) / (2π D); +inf at zero displacement (logarithmic singularity).
 
     Examples
     --------
@@ -88,7 +88,7 @@ def vergassola_concentration(displacement, *, wind, diffusivity: float, lifetime
 def vergassola_encounter_rate(
     displacement, *, wind, diffusivity: float, lifetime: float, emission_rate: float, sensor_radius: float
 ) -> np.ndarray:
-    """Encounter rate R(r | r0) = R / ln(λ/a) · exp(w·(r − r0)/(2D)) · K0(|r − r0|/λ), in 1/s.
+    """Encounter rate R(r | r0) = R / ln(λ/a) · exp(w·(r − r0)/(2D)) · K0(‖r − r0‖/λ), in 1/s.
 
     Parameters
     ----------

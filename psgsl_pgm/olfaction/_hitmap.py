@@ -2,8 +2,8 @@
 
 After Ojeda, Monroy & Gonzalez-Jimenez, PMFS (Probabilistic Mapping of Filament Sources; the ``PMFS``
 algorithm of MAPIRlab/GasSourceLocalization): each reading is spread from the robot's cell to the cells
-around it with a Gaussian kernel that is stretched along the measured wind (semi-axes σ + k|w| along the wind
-and σ / (1 + k|w|/σ) across it, as in PMFS) and evaluated at the *geodesic* displacement — the straight
+around it with a Gaussian kernel that is stretched along the measured wind (semi-axes σ + k‖w‖ along the wind
+and σ / (1 + k‖w‖/σ) across it, as in PMFS) and evaluated at the *geodesic* displacement — the straight
 displacement rescaled to the shortest free-space path length (8-connected, no corner cutting), so that
 evidence does not cross walls. PMFS then runs a log-odds binary filter per cell; here the kernel weight
 w_k(c) of reading k at cell c is used as a fractional Bernoulli observation of that cell's hit probability
@@ -43,7 +43,7 @@ class HitProbabilityMap:
     kernel_sigma : float, default 0.3
         σ in metres: kernel width in still air.
     kernel_stretch : float, default 1.0
-        k in seconds: the along-wind semi-axis is σ + k |w|, the cross-wind one σ / (1 + k |w| / σ).
+        k in seconds: the along-wind semi-axis is σ + k ‖w‖, the cross-wind one σ / (1 + k ‖w‖ / σ).
     confidence_scale : float, default 0.5
         n0: conf = 1 − exp(−n / n0) for an accumulated kernel weight n.
     cutoff : float, default 3.0

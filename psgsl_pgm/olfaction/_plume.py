@@ -72,12 +72,6 @@ class PlumeModel:
         :func:`vergassola_encounter_scale` for κ = R Δt 2π D / ln(λ/a) from physical quantities and
         :func:`fit_encounter_scale` for a maximum-likelihood fit to readings around a known source.
 
-    Notes
-    -----
-    The defaults are illustrative, not calibrated: with D = 0.05 m²/s, τ = 20 s and κ = 0.4 m²/s, a source in
-    open space with a 0.1 m/s wind gives P(hit) ≈ 0.56 one metre downwind and ≈ 0.11 one metre upwind
-    (h = 0.1 m). Calibrate D, τ and κ on readings around known sources before drawing conclusions
-    (:func:`fit_plume_parameters`).
     boundary : {"wall", "open"}, default "wall"
         The map border: no-flux wall, or absorbing free space.
     scheme : {"exponential", "upwind"}, default "exponential"
@@ -85,6 +79,13 @@ class PlumeModel:
     cache_size : int, default 512
         Number of sensor cells whose Green's-function rows are kept (least recently used first out; each
         row is H·W float64, so 512 rows of the 120 x 100 default house take 49 MB).
+
+    Notes
+    -----
+    The defaults are illustrative, not calibrated: with D = 0.05 m²/s, τ = 20 s and κ = 0.4 m²/s, a source in
+    open space with a 0.1 m/s wind gives P(hit) ≈ 0.56 one metre downwind and ≈ 0.11 one metre upwind
+    (h = 0.1 m). Calibrate D, τ and κ on readings around known sources before drawing conclusions
+    (:func:`fit_plume_parameters`).
 
     Examples
     --------

@@ -21,7 +21,7 @@ class PMFSEstimator(OlfactoryEstimator):
     candidate source s by how well the hit map it would produce, h_c(s), agrees with the estimate ĥ_c, each
     cell weighted by its confidence (PMFS ``Simulations::weightedDifference``):
 
-        p(s | g) ∝ p(s) · Π_c [1 − γ · conf_c · |ĥ_c − h_c(s)|],            (PMFS score)
+        p(s | g) ∝ p(s) · Π_c [1 − γ · conf_c · abs(ĥ_c − h_c(s))],            (PMFS score)
 
     computed as a sum of ``log1p`` terms. Every factor lies in [1 − γ, 1], so no single cell can veto a
     source: the score is a bounded pseudo-likelihood, and the posterior is recomputed from the current hit map
@@ -185,7 +185,7 @@ class PMFSEstimator(OlfactoryEstimator):
 
     @property
     def score(self) -> np.ndarray:
-        """(H, W) the untempered PMFS score Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|] of every candidate s (a copy)."""
+        """(H, W) the untempered PMFS score Σ_c log[1 − γ conf_c abs(ĥ_c − h_c(s))] of every candidate s (a copy)."""
         return self._score.reshape(self.geometry.shape).copy()
 
     @property

@@ -56,7 +56,7 @@ def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None
     return run
 
 
-#: The comparison declared before the runs (README "Closed-loop search"): in ``paired.json`` of source oven,
+#: The comparison declared before the runs (docs/guide/closed-loop.md): in ``paired.json`` of source oven,
 #: estimator infotaxis, it is marked ``"primary": true`` and tested alone at 5 %; every other comparison of a table
 #: is secondary and Holm-adjusted within its table.
 PRIMARY = {"source": "oven", "estimator": "infotaxis",

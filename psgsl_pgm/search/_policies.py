@@ -33,7 +33,7 @@ as on the tour), and the fixed time of one gas reading.
   G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it).
 * ``"gain"`` — score(p) = G(p): the most informative candidate pose, however long it takes to reach.
   Dividing by τ favours the short, cheap moves around the robot where every pose gains little; in the house
-  that kept infotaxis out of the bedroom (README, "Closed-loop search").
+  that kept infotaxis out of the bedroom (docs/results/closed-loop.md).
 
 The best score wins; ties go to the first candidate (lattice order) and the first heading. The robot always
 moves (:meth:`FreeSpace.candidates`).
@@ -146,7 +146,7 @@ def _wrap(a):
 
 
 def travel_time(drive, turn, *, speed: float, turn_time: float, sense_time: float) -> np.ndarray:
-    """τ = drive / speed + turn_time · |turn| / (π/2) + sense_time (s), broadcast over drive and turn."""
+    """τ = drive / speed + turn_time · abs(turn) / (π/2) + sense_time (s), broadcast over drive and turn."""
     return (np.asarray(drive, dtype=np.float64) / speed + turn_time * np.abs(turn) / (np.pi / 2) + sense_time)
 
 

@@ -179,10 +179,10 @@ def holm(pvalues) -> np.ndarray:
 def sign_flip_pvalue(differences, *, n_resamples: int = 100_000, seed: int = 0) -> dict:
     """Two-sided paired sign-flip permutation test of "the mean difference is 0".
 
-    The statistic is |Σ dᵢ|; under the null hypothesis each dᵢ is as likely as −dᵢ. For n ≤ :data:`EXACT_MAX`
-    all 2^n sign vectors are enumerated and p = #{|Σ sᵢdᵢ| ≥ |Σ dᵢ|} / 2^n (exact); otherwise ``n_resamples``
+    The statistic is abs(Σ dᵢ); under the null hypothesis each dᵢ is as likely as −dᵢ. For n ≤ :data:`EXACT_MAX`
+    all 2^n sign vectors are enumerated and p = #{abs(Σ sᵢdᵢ) ≥ abs(Σ dᵢ)} / 2^n (exact); otherwise ``n_resamples``
     sign vectors are drawn with ``numpy.random.default_rng(seed)`` and p = (1 + #) / (1 + n_resamples).
-    Sums equal up to rounding (|Σ sᵢdᵢ| within 1e-12 relative of the observed) count as ≥.
+    Sums equal up to rounding (abs(Σ sᵢdᵢ) within 1e-12 relative of the observed) count as ≥.
 
     Returns
     -------

@@ -38,7 +38,7 @@ def read_gaden_wind_csv(path, *, like: GridMap, height: float, slab: float | Non
     height : float, keyword-only
         z of the horizontal slice, metres.
     slab : float, optional, keyword-only
-        Points with |z − height| <= slab / 2 are used (default: one grid cell, ``like.resolution``).
+        Points with abs(z − height) <= slab / 2 are used (default: one grid cell, ``like.resolution``).
     max_distance : float, optional, keyword-only
         Free cells farther than this from every slab point get zero wind (default: 2 cells).
 

@@ -88,7 +88,7 @@ class WindField:
         return (self.u_faces[:, 1:] - self.u_faces[:, :-1] + self.v_faces[1:] - self.v_faces[:-1]) / res
 
     def speed(self) -> np.ndarray:
-        """(H, W) |velocity| in m/s."""
+        """(H, W) ‖velocity‖ in m/s."""
         return np.hypot(self.velocity[..., 0], self.velocity[..., 1])
 
     def __add__(self, other: "WindField") -> "WindField":
@@ -133,7 +133,7 @@ def potential_flow(grid: GridMap, inlet, outlet, *, mean_speed: float = 0.2) -> 
     inlet, outlet : (H, W) ndarray of bool
         Window cells with φ = 1 and φ = 0; disjoint and non-empty.
     mean_speed : float, keyword-only
-        Mean |velocity| over the free non-window cells after scaling, m/s (> 0).
+        Mean ‖velocity‖ over the free non-window cells after scaling, m/s (> 0).
 
     Returns
     -------

@@ -77,7 +77,8 @@ def navigable(house: House, clearance: float = 0.25) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class WorldSpec:
-    """A loaded world file (see the module docstring); :meth:`house` and :meth:`make_world` build the simulation.
+    """A loaded world file (see the module docstring); :meth:`~WorldSpec.house` and :meth:`~WorldSpec.make_world`
+    build the simulation.
 
     Attributes
     ----------

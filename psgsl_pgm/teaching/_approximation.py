@@ -26,7 +26,7 @@ def approximation_error(cell_counts, *, n_problems=20, k=4, seed=0, max_observat
     * ``"marginal"``: class prior p(o) (the paper's approximation p(o_ni | s_c) ≈ p(o_ni));
     * ``"background"``: class prior β = p(o | ¬s) (exact: its error is round-off).
 
-    TV(p, q) = ½ Σ_c |p_c − q_c|.
+    TV(p, q) = ½ Σ_c abs(p_c − q_c).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Hostile inputs and the contract they are checked against (README "Bad input").
+"""Hostile inputs and the contract they are checked against (docs/guide/bad-input.md).
 
 Every public entry point, for every argument:
 

@@ -1,6 +1,6 @@
 """Fuzz every file loader with malformed, truncated, re-encoded and hostile files.
 
-Contract (README "Bad input"): a loader returns a valid result, or raises ValueError/TypeError (FileNotFoundError
+Contract (docs/guide/bad-input.md): a loader returns a valid result, or raises ValueError/TypeError (FileNotFoundError
 for a missing file) whose message names the file — never another exception type, never a hang. Some mutations
 must be refused outright: duplicate keys, bytes that are not UTF-8, a cut image, an integer no float holds, an
 image header larger than the pixel limit.

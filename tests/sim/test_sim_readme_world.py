@@ -1,4 +1,5 @@
-"""The README's world-file example is a valid world file: written next to files it names, it loads and checks."""
+"""The user guide's world-file example (docs/guide/own-house.md) is a valid world file: written next to files it
+names, it loads and checks."""
 
 import re
 from pathlib import Path
@@ -10,12 +11,12 @@ from psgsl_pgm import load_world
 from psgsl_pgm.sim import GridMap, SceneObject, box_footprint, save_objects, save_room_map, save_ros_map
 from psgsl_pgm.search import findability
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+README = Path(__file__).resolve().parents[2] / "docs" / "guide" / "own-house.md"  # the guide's page
 
 
 def readme_world() -> str:
     text = README.read_text(encoding="utf-8")
-    section = text[text.index("## Your own house"):]
+    section = text[text.index("# Your own house"):]
     return re.search(r"```yaml\n(.*?)```", section, flags=re.S).group(1)
 
 
