@@ -322,11 +322,14 @@ def _entropy_terms(w, f, f_uniform, total, log_w, log_f, log_total, part, c0, c1
     has_f = f.shape[0] > 0
     log_uniform = math.log(f_uniform) if f_uniform > 0 else 0.0
     for c in range(c0, c1):
+        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
+        wc, lwc = w[lo:hi], log_w[lo:hi]  # views: indices from 0 vectorise to contiguous loads, not gathers
+        fc, lfc = (f[lo:hi], log_f[lo:hi]) if has_f else (f[:0], log_f[:0])
         h = 0.0
-        for r in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            p = (f[r] if has_f else f_uniform) * w[r] / total
+        for r in range(hi - lo):
+            p = (fc[r] if has_f else f_uniform) * wc[r] / total
             if p > 0:
-                h -= p * ((log_f[r] if has_f else log_uniform) + log_w[r] - log_total)
+                h -= p * ((lfc[r] if has_f else log_uniform) + lwc[r] - log_total)
         part[c] = h
 
 
@@ -425,9 +428,11 @@ def _fuse_sum(a, b, prior, extra, part, c0, c1):
         total = 0.0
         unsafe = 0
         zero_support = 0
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            x = np.float64(a[i])
-            y = np.float64(b[i])
+        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
+        ac, bc, pc = a[lo:hi], b[lo:hi], prior[lo:hi] if has_prior else prior
+        for i in range(hi - lo):
+            x = np.float64(ac[i])
+            y = np.float64(bc[i])
             neg_a += x < 0
             neg_b += y < 0
             sa += x
@@ -435,7 +440,7 @@ def _fuse_sum(a, b, prior, extra, part, c0, c1):
             z = x * y  # p(s_c|e_1) p(s_c|e_2)
             bad = (z < TINY) & (x > 0) & (y > 0)
             if has_prior:
-                pr = np.float64(prior[i])
+                pr = np.float64(pc[i])
                 if z != 0.0 and pr == 0.0:
                     zero_support += 1
                     z = 0.0
@@ -459,13 +464,15 @@ def _fuse_write(out, a, b, prior, extra, total, c0, c1):
     """Second pass: out = a b / prior^extra / T, rounded once to ``out``'s dtype (eq. ``combined-conditionals``)."""
     n = a.shape[0]
     has_prior = prior.shape[0] > 0
-    for i in range(c0 * CHUNK, min(n, c1 * CHUNK)):
-        z = np.float64(a[i]) * np.float64(b[i])
+    lo, hi = c0 * CHUNK, min(n, c1 * CHUNK)
+    oc, ac, bc, pc = out[lo:hi], a[lo:hi], b[lo:hi], prior[lo:hi] if has_prior else prior
+    for i in range(hi - lo):
+        z = np.float64(ac[i]) * np.float64(bc[i])
         if has_prior and z > 0.0:
-            pr = np.float64(prior[i])
+            pr = np.float64(pc[i])
             for _ in range(extra):
                 z /= pr
-        out[i] = z / total
+        oc[i] = z / total
 
 
 @nb.njit(**_JIT)
@@ -480,18 +487,20 @@ def _fuse_step(p, a, first, part, c0, c1):
         neg = 0
         s = 0.0
         unsafe = 0
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            x = np.float64(a[i])
+        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
+        pch, ac = p[lo:hi], a[lo:hi]
+        for i in range(hi - lo):
+            x = np.float64(ac[i])
             neg += x < 0
             s += x
             if first:
-                p[i] = x
+                pch[i] = x
             else:
-                pc = p[i]
+                pc = pch[i]
                 z = pc * x
                 bad = (z < TINY) & (pc > 0) & (x > 0)
                 unsafe += bad
-                p[i] = -1.0 if (bad | (pc < 0)) else z
+                pch[i] = -1.0 if (bad | (pc < 0)) else z
         part[c, 0] = neg
         part[c, 1] = s
         part[c, 2] = unsafe
@@ -510,10 +519,12 @@ def _fuse_finish(p, prior, extra, part, c0, c1):
         s = 0.0
         marked = 0
         zero_support = 0
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            y = p[i]
+        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
+        pch, prc = p[lo:hi], prior[lo:hi] if has_prior else prior
+        for i in range(hi - lo):
+            y = pch[i]
             if has_prior:
-                pr = prior[i]
+                pr = prc[i]
                 if y != 0.0 and pr == 0.0:
                     zero_support += 1
                 elif y > 0.0:
@@ -521,7 +532,7 @@ def _fuse_finish(p, prior, extra, part, c0, c1):
                         y /= pr
                     if y > HUGE:
                         y = -1.0
-                    p[i] = y
+                    pch[i] = y
             if y < 0.0:
                 marked += 1
             else:
