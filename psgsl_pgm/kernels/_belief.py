@@ -4,7 +4,8 @@ The cost of the closed form is one read of ``class_probs``. Each kernel reads ev
 row (k values) is in L1, derives every per-cell quantity the caller needs — the semantic weight
 w_c = q_c · ρ, the row sum, the number of negative entries, the mass on zero-prior classes and, for the
 information gain, the central moments of ρ under q_c. The weight kernel reduces :data:`ROWS` rows at a time
-(one load of ρ_i serves four dot products) and is memory-bound. The moments kernel does about five times the
+(one load of ρ_i serves four dot products) in explicit 64-byte vectors with one transposed reduction tree for
+the eight sums (:mod:`psgsl_pgm.kernels._rows`), and is memory-bound. The moments kernel does about five times the
 arithmetic per entry and is compute-bound on a 2-core machine (measured: 85–96 ns per 80-class row and core,
 in cache). Both prefetch the rows :data:`AHEAD` bytes on (:mod:`psgsl_pgm.kernels._prefetch`), so that memory reads
 overlap the arithmetic. Fusion of two inputs takes two passes and no temporary: the normaliser, then the
@@ -38,6 +39,7 @@ import numpy as np
 
 from . import _cache as _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
 from ._prefetch import prefetch
+from ._rows import rows4
 
 __all__ = [
     "CHUNK",
@@ -140,21 +142,21 @@ def combine_stats(part: np.ndarray) -> np.ndarray:
 def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
     """Rows of chunks [c0, c1): w = q @ rho (accumulated in q's dtype, like a BLAS GEMV) and statistics.
 
-    :data:`ROWS` rows are reduced together, so each load of ρ serves four dot products and the loop over the
-    classes runs once per four rows; the rows :data:`AHEAD` bytes on are prefetched meanwhile. Only the weight
-    and the row sum are reduced per row; the minimum and the zero-prior mass are kept per class (element-wise,
-    no per-row horizontal reduction) and reduced once per chunk.
+    :data:`ROWS` rows are reduced together by :func:`psgsl_pgm.kernels._rows.rows4`, so each load of ρ serves
+    four dot products and the loop over the classes runs once per four rows; the rows :data:`AHEAD` bytes on are
+    prefetched meanwhile. Negative entries are found from the sum of min(entry, 0) (a sum of non-positive terms
+    is negative iff one of them is), kept in a register; the zero-prior mass is kept per class and reduced once
+    per chunk.
     """
     n, k = q.shape
     nought = rho[0] - rho[0]  # 0 in q's dtype (rho is finite)
-    lo = np.empty(k, q.dtype)
     leak = np.empty(k, q.dtype)
     sums = np.empty(ROWS)  # row sums of the current block (float64: exact for float32 sums)
     ahead = AHEAD // q.itemsize
     line = LINE // q.itemsize
     size = q.size
     for c in range(c0, c1):
-        lo[:] = nought
+        lo = nought  # Σ of min(entries, 0): negative iff some entry is (a sum of non-positive terms cannot cancel)
         leak[:] = nought
         worst = 0.0
         worst_row = 0
@@ -166,24 +168,9 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
             start = r * k + ahead
             for e in range(start, min(start + rows * k, size), line):
                 prefetch(q, e)
-            if rows == ROWS:
-                a0 = a1 = a2 = a3 = nought
-                s0 = s1 = s2 = s3 = nought
-                for i in range(k):
-                    x0 = q[r, i]
-                    x1 = q[r + 1, i]
-                    x2 = q[r + 2, i]
-                    x3 = q[r + 3, i]
-                    p = rho[i]
-                    a0 += x0 * p  # w_c = Σ_i p(o_ci|z_c) ρ_i
-                    a1 += x1 * p
-                    a2 += x2 * p
-                    a3 += x3 * p
-                    s0 += x0  # Σ_i p(o_ci|z_c) = 1
-                    s1 += x1
-                    s2 += x2
-                    s3 += x3
-                    lo[i] = min(lo[i], min(min(x0, x1), min(x2, x3)))
+            if rows == ROWS:  # one pass over the four rows in explicit vectors (psgsl_pgm.kernels._rows)
+                a0, a1, a2, a3, s0, s1, s2, s3, neg = rows4(q, r, rho)
+                lo += neg
                 w[r] = a0
                 w[r + 1] = a1
                 w[r + 2] = a2
@@ -201,7 +188,7 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
                         x = q[r + j, i]
                         acc += x * rho[i]
                         s += x
-                        lo[i] = min(lo[i], x)
+                        lo += min(x, nought)
                     w[r + j] = acc
                     tot += acc
                     sums[j] = s
@@ -217,7 +204,7 @@ def _belief_weights(q, rho, zero, has_zero, w, part, c0, c1):
                     worst = d
                     worst_row = r + j
             r += rows
-        part[c, 0] = -lo.min()
+        part[c, 0] = -lo
         part[c, 1] = worst
         part[c, 2] = worst_row
         part[c, 3] = leak.max()
