@@ -42,3 +42,36 @@ def test_a_single_negative_entry_is_found_in_any_class_of_any_row_of_a_block(k, 
             bad = q.copy()
             bad[row, cls] = -tiny
             assert _kernel.belief_weights(bad, rho, zero)[1][0] > 0, (row, cls)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("k", CLASS_COUNTS)
+@pytest.mark.parametrize("paper", [True, False])
+def test_moments_match_a_direct_float64_computation_for_every_row_length(k, dtype, paper):
+    # rows4v (w, v, row sums of a four-row block) and central (μ_2..μ_5, ν_1..ν_4 about w_n), whole vectors and
+    # the masked rest, float32 entries widened to float64
+    rng = np.random.default_rng(200 + k)
+    n = 11
+    q = rng.dirichlet(np.ones(k) * 0.4, size=n).astype(dtype)
+    rho = rng.random(k) * 2
+    rlr = rho * np.log(rho)
+    f = rng.dirichlet(np.ones(n))
+    w, mom, stats = _kernel.belief_moments(q, rho, rlr, np.zeros(k), f, 0.0, paper)
+    q64 = q.astype(np.float64)
+    np.testing.assert_allclose(w, q64 @ rho, rtol=1e-14)
+    np.testing.assert_allclose(mom[:, 0], q64 @ rlr, rtol=1e-13, atol=1e-16)
+    d = rho[None, :] - w[:, None]
+    for j in range(2, _kernel.ORDER + 1):
+        np.testing.assert_allclose(mom[:, j - 1], np.sum(q64 * d**j, axis=1), rtol=1e-12, atol=1e-18)
+    if paper:
+        for j in range(1, _kernel.ORDER):
+            np.testing.assert_allclose(mom[:, _kernel.ORDER + j - 1], np.sum(q64 * rlr * d**j, axis=1),
+                                       rtol=1e-12, atol=1e-18)
+    assert stats[0] == 0
+    assert stats[4] == pytest.approx(f @ (q64 @ rho), rel=1e-14)
+    tiny = np.finfo(dtype).smallest_subnormal
+    for row in (0, 3, 5, 10):  # in a block (first, last of the first, inside the second) and in the tail
+        for cls in {0, k // 2, k - 1}:
+            bad = q.copy()
+            bad[row, cls] = -tiny
+            assert _kernel.belief_moments(bad, rho, rlr, np.zeros(k), f, 0.0, paper)[2][0] > 0, (row, cls)
