@@ -99,7 +99,8 @@ def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
     if not (np.isfinite(p).all() and (p >= 0).all() and abs(p.sum() - 1.0) < 1e-6):
         raise ValueError("posterior must be a distribution (finite, >= 0, sums to 1)")
     flat = p.ravel()
-    order = np.argsort(-flat, kind="stable")
+    positive = np.flatnonzero(flat > 0)  # the zero cells come last in the order and add nothing to the sums
+    order = positive[np.argsort(-flat[positive], kind="stable")]
     csum = np.cumsum(flat[order])
     k = int(np.searchsorted(csum, mass * csum[-1] * (1 - 1e-12))) + 1  # first prefix reaching the mass
     region = np.zeros(flat.size, bool)
