@@ -1,4 +1,5 @@
-"""GADEN's filament gas-dispersion model in 2-D, vectorised over filaments.
+"""GADEN's filament gas-dispersion model in 2-D (the loops over the filaments compiled,
+:mod:`psgsl_pgm.kernels._filaments`).
 
 Each time step (as GADEN's ``filament_simulator``): new filaments are released at the source at
 ``release_rate``; every filament moves by the local wind (nearest cell of the snapshot in force) times dt
@@ -12,7 +13,8 @@ and the concentration at a point x is (GADEN's player, with the filament's line 
     C(x) = Σ_f ppm_centre · (σ0 / σ_f)³ · exp(−|x − x_f|² / 2σ_f²)    over filaments with |x − x_f| < 5 σ_f.
 
 Line of sight is between the centres of the query cell and the filament's cell (exact traversal, cached per
-query cell; see :mod:`psgsl_pgm.geometry._sight`).
+query cell; see :mod:`psgsl_pgm.geometry._sight`). A gas sensor's window — n steps, each followed by a
+concentration at the sensor — is one compiled pass (:meth:`FilamentModel.sample`).
 """
 
 from __future__ import annotations
