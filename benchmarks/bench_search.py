@@ -9,18 +9,28 @@ process (not a test).
   on the geometry and the run only), and the first (cold) decision; the same for the 2-m horizon alone. The
   target is ≤ 20 ms per decision with warm caches;
 * one semantic-term evaluation p(s | z) on the same map (eq. ``prob-semantics-final``): the unit of the ratio;
-* one 1000-s house episode (``infotaxis/semantics+rooms``, never found: found_radius = 1 mm) wall time, and its
-  split into gas simulation (the filament steps), gas readings (concentration at the sensor), camera frames,
-  belief updates (p(s | g) and the class-belief maps), posteriors (the variant's p(s | g, z) at each stop),
-  decisions (φ_G + φ_O over the candidates) and the rest (shares of the wall time).
+* one 1000-s house episode (``infotaxis/semantics+rooms``, seed 0, never found: found_radius = 1 mm): its real-time
+  factor (1000 s of simulated time / wall time, best and median of ``--episodes`` runs of the same seeded
+  episode on the prepared geometry), and the split of one run into gas simulation (the filament steps while
+  driving and turning), gas readings (the sensor windows: their filament steps and concentration sums), camera
+  frames, belief updates (p(s | g) and the class-belief map), posteriors (the variant's p(s | g, z) at each
+  stop), decisions (φ_G + φ_O over the candidates) and the rest (shares of the wall time);
+* the first-call cost: a short episode in a fresh process with an empty numba cache (compiling every kernel
+  it calls) and again with the cache filled (loading them).
 
-Run: ``python benchmarks/bench_search.py [--repeats 20] [--no-episode]`` on an otherwise idle core.
+One core: run it as ``taskset -c 0 python benchmarks/bench_search.py``; the BLAS is limited to one thread here
+(threadpoolctl), as in the grid's workers. Run: ``python benchmarks/bench_search.py [--repeats 20]
+[--episodes 5] [--no-episode] [--no-compile]`` on an otherwise idle core.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -39,8 +49,16 @@ def _median_ms(fn, repeats):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeats", type=int, default=20)
+    ap.add_argument("--episodes", type=int, default=5)
     ap.add_argument("--no-episode", action="store_true")
+    ap.add_argument("--no-compile", action="store_true")
     a = ap.parse_args(argv)
+    try:
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(limits=1, user_api="blas")
+    except ImportError:
+        print("threadpoolctl not installed: the BLAS may use several threads")
 
     from psgsl_pgm import semantic_source_probability
     from psgsl_pgm.experiment import ExperimentConfig
@@ -85,10 +103,20 @@ def main(argv=None):
         from psgsl_pgm.search import _loop
         from psgsl_pgm.sim import World, _filaments
 
+        never = SearchConfig(found_radius=1e-3)
+        walls = []
+        for _ in range(max(1, a.episodes)):
+            t0 = time.perf_counter()
+            run = run_closed_loop("oven", 0, "infotaxis", "semantics+rooms", search=never, space=space)
+            walls.append(time.perf_counter() - t0)
+        best, median = min(walls), statistics.median(walls)
+        print(f"one {run.time_to_find:.0f}-s episode ({run.n_steps} stops), {len(walls)} runs: best {best:.3f} s "
+              f"({run.time_to_find / best:,.0f}x real time), median {median:.3f} s ({run.time_to_find / median:,.0f}x "
+              f"real time); {best / unit * 1e3:,.0f} semantic terms")
         # the episode's parts (none calls another), timed by wrapping them; the rest is the loop itself,
-        # credible regions, metrics, the world's construction
+        # credible regions, metrics, the "not found" update, the world's construction
         parts = (("gas simulation", _filaments.FilamentModel, "step"),
-                 ("gas readings", _filaments.FilamentModel, "concentration"),
+                 ("gas readings", _filaments.FilamentModel, "sample"),
                  ("camera frames", World, "camera_frame"),
                  ("belief updates", VariantPosteriors, "observe"),
                  ("posteriors", VariantPosteriors, "posteriors"),
@@ -109,17 +137,24 @@ def main(argv=None):
             setattr(owner, name, timed(label, fn))
         try:
             t0 = time.perf_counter()
-            run = run_closed_loop("oven", 0, "infotaxis", "semantics+rooms", search=SearchConfig(found_radius=1e-3),
-                                  space=space)
+            run = run_closed_loop("oven", 0, "infotaxis", "semantics+rooms", search=never, space=space)
             wall = time.perf_counter() - t0
         finally:
             for owner, name, fn in saved:
                 setattr(owner, name, fn)
-        gas = spent["gas simulation"]
-        print(f"one {run.time_to_find:.0f}-s episode ({run.n_steps} stops): {wall:6.1f} s wall, of which gas "
-              f"simulation {gas:5.1f} s ({gas / wall:.0%}); {wall / unit * 1e3:,.0f} semantic terms")
         split = ", ".join(f"{label} {t / wall:.0%}" for label, t in spent.items())
-        print(f"  split of the wall time: {split}, the rest {1 - sum(spent.values()) / wall:.0%}")
+        print(f"  split of one run ({wall:.3f} s): {split}, the rest {1 - sum(spent.values()) / wall:.0%}")
+    if not a.no_compile:
+        code = ("import time; t = time.perf_counter(); from psgsl_pgm.search import SearchConfig, run_closed_loop; "
+                "run_closed_loop('oven', 0, 'infotaxis', 'semantics+rooms', search=SearchConfig(time_budget=20.0)); "
+                "print(time.perf_counter() - t)")
+        with tempfile.TemporaryDirectory() as cache:
+            env = {**os.environ, "NUMBA_CACHE_DIR": cache, "OPENBLAS_NUM_THREADS": "1"}
+            cold, warm = (float(subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True,
+                                               text=True).stdout.split()[-1]) for _ in range(2))
+        print(f"first call, a 20-s episode in a fresh process: {cold:.1f} s with an empty numba cache (compiling), "
+              f"{warm:.1f} s with it filled: {cold - warm:.1f} s of compilation")
+
 
 if __name__ == "__main__":
     main()

@@ -56,7 +56,16 @@ def error_and_spread(posteriors, centres, truth):
     check_nonnegative(p, "posteriors")
     check_sums(p.reshape(p.shape[:-2] + (-1,)).sum(axis=-1), "posteriors", p.dtype, over="each over its (H, W) cells")
     truth = real_pair(truth, "truth", "an (x, y)", "metres")
-    flat = p.reshape(p.shape[:-2] + (-1,))
+    error, spread = _error_and_spread(p.reshape(p.shape[:-2] + (-1,)), c.reshape(-1, 2), truth)
+    if not (np.isfinite(error).all() and np.isfinite(spread).all()):
+        raise ValueError(f"centres and truth: the error or the spread exceeds the float64 range (coordinates up to "
+                         f"{max(np.abs(c).max(), np.abs(truth).max()):.3g} m)")
+    return error, spread
+
+
+def _error_and_spread(flat, xy, truth):
+    """:func:`error_and_spread` of checked arguments: ``flat`` (..., n) distributions over the n cells of
+    centres ``xy`` (n, 2), ``truth`` (2,) float64 (not finite when the result exceeds float64)."""
 
     def moments(xy, truth):
         mean = flat @ xy  # E[s]
@@ -65,12 +74,7 @@ def error_and_spread(posteriors, centres, truth):
         error = np.linalg.norm(mean - truth, axis=-1)
         return error, np.sqrt(var)
 
-    xy = c.reshape(-1, 2)
-    error, spread = _scale_free(moments, (xy, truth), lambda: max(np.abs(xy).max(), np.abs(truth).max()))
-    if not (np.isfinite(error).all() and np.isfinite(spread).all()):
-        raise ValueError(f"centres and truth: the error or the spread exceeds the float64 range (coordinates up to "
-                         f"{max(np.abs(c).max(), np.abs(truth).max()):.3g} m)")
-    return error, spread
+    return _scale_free(moments, (xy, truth), lambda: max(np.abs(xy).max(), np.abs(truth).max()))
 
 
 def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
@@ -99,7 +103,8 @@ def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
     if not (np.isfinite(p).all() and (p >= 0).all() and abs(p.sum() - 1.0) < 1e-6):
         raise ValueError("posterior must be a distribution (finite, >= 0, sums to 1)")
     flat = p.ravel()
-    order = np.argsort(-flat, kind="stable")
+    positive = np.flatnonzero(flat > 0)  # the zero cells come last in the order and add nothing to the sums
+    order = positive[np.argsort(-flat[positive], kind="stable")]
     csum = np.cumsum(flat[order])
     k = int(np.searchsorted(csum, mass * csum[-1] * (1 - 1e-12))) + 1  # first prefix reaching the mass
     region = np.zeros(flat.size, bool)

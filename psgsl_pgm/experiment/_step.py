@@ -125,6 +125,9 @@ class VariantPosteriors:
     setting : world spec, optional, keyword-only
         The ontology, source region (the estimators' prior) and optional mapper beliefs of the world
         (:func:`psgsl_pgm.load_world`); default :func:`psgsl_pgm.sim.default_world`.
+    variants : sequence of str, optional, keyword-only
+        The variants whose posteriors are wanted (default: all of :data:`VARIANTS`); only their class-belief maps
+        are kept and updated (a closed-loop run needs its own variant's only).
 
     Attributes
     ----------
@@ -132,7 +135,7 @@ class VariantPosteriors:
         p(s | g), shared by the variants.
     maps : dict
         ``{"semantics": ClassBeliefMap, "semantics+rooms": ClassBeliefMap}`` (the core's class beliefs, in
-        the detector's class order decided here, once).
+        the detector's class order decided here, once), for the semantic variants among ``variants``.
     likelihood, class_prior : (k,) ndarray
         p(o | s, γ) and β = p(o | ¬s) in the detector's class order.
     model : PlumeModel
@@ -147,7 +150,12 @@ class VariantPosteriors:
         Whether the class beliefs come from a mapper (then the camera is not used).
     """
 
-    def __init__(self, world, estimator: str, config: ExperimentConfig, *, setting=None):
+    def __init__(self, world, estimator: str, config: ExperimentConfig, *, setting=None, variants=VARIANTS):
+        variants = tuple(variants)
+        bad = [v for v in variants if v not in VARIANTS]
+        if bad or not variants:
+            raise ValueError(f"variants must be among {VARIANTS}, got {list(variants)}")
+        self.variants = variants
         setting = default_world() if setting is None else setting
         house = world.house
         ontology = setting.ontology
@@ -178,7 +186,7 @@ class VariantPosteriors:
             plain = ClassBeliefMap.from_prior(house.shape, beta, classes)
             rooms = ClassBeliefMap.from_rooms(labels, room_table, beta, classes) if has_rooms else \
                 ClassBeliefMap.from_prior(house.shape, beta, classes)
-        self.maps = {"semantics": plain, "semantics+rooms": rooms}
+        self.maps = {v: m for v, m in (("semantics", plain), ("semantics+rooms", rooms)) if v in variants}
         # the robot's own models, never the simulator's: the mean wind from its anemometer readings (a still-air
         # plume until the first reading), the detector model counted on reference houses
         self._config = config
@@ -220,7 +228,7 @@ class VariantPosteriors:
         self.wind.add(stop, wind)
         self._refresh_wind()
         self.estimator.update(stop, reading.hit, wind)
-        for frame in frames:
+        for frame in frames if self.maps else ():
             if self.detector_model is not None:  # the labels read with the robot's model of its detector
                 frame = replace(frame, likelihood=self.detector_model.likelihood(frame.labels, frame.distance))
             for m in self.maps.values():  # the same frames for both maps: one observation stream
@@ -234,13 +242,15 @@ class VariantPosteriors:
 
     def semantic(self, variant: str) -> np.ndarray:
         """p(s | z) of a semantic variant, (H, W)."""
+        if variant not in self.maps:
+            raise ValueError(f"variant must be one of the semantic variants kept, {tuple(self.maps)}, got {variant!r}")
         return semantic_terms([self.maps[variant]], self.likelihood, self.class_prior)[0]
 
     def posteriors(self, variants=VARIANTS) -> np.ndarray:
         """(len(variants), H, W) posterior of each variant now."""
-        bad = [v for v in variants if v not in VARIANTS]
+        bad = [v for v in variants if v not in self.variants]
         if bad:
-            raise ValueError(f"variants must be among {VARIANTS}, got {bad}")
+            raise ValueError(f"variants must be among {self.variants} (the variants kept), got {bad}")
         p_g = self.estimator.posterior  # p(s | g)
         semantic = [v for v in variants if v != "olfaction"]
         p_z = dict(zip(semantic, semantic_terms([self.maps[v] for v in semantic], self.likelihood,

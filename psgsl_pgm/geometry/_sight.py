@@ -12,7 +12,8 @@ Two exact implementations of the same rule:
   boundaries at parameters t = (k - 1/2)/|Δc| and the row boundaries at t = (j - 1/2)/|Δr|, so the cell
   entered at every crossing follows from integer counting (no floating-point stepping). Where the segment
   passes exactly through a cell corner, both cells beside the corner are checked. Cost O(n · L) for n
-  segments of L cells.
+  segments of L cells (compiled, :func:`psgsl_pgm.kernels._sight.segment_clear`, which the filament model's
+  compiled loops also call).
 * :func:`visible_from` — every cell seen from one cell centre, by shadow casting over the Chebyshev rings
   around it (compiled, :mod:`psgsl_pgm.kernels._sight`): an occupied cell in ring j hides exactly the directions of its closed angular interval for
   every target in a ring k > j (and at a ring's diagonal, the two ring cells beside the corner). Directions
@@ -28,25 +29,6 @@ from collections import OrderedDict
 import numpy as np
 
 __all__ = ["cells_clear", "LineOfSightCache", "visible_from"]
-
-
-def _count_below(q: np.ndarray, d: np.ndarray, strict: bool) -> np.ndarray:
-    """#{j >= 1 : (2j - 1) d < q} (strict) or <= q, for integer arrays q >= 0, d >= 1."""
-    if strict:
-        return (q + 3 * d - 1) // (2 * d) - 1  # ceil((q + d) / 2d) - 1
-    return (q + d) // (2 * d)  # floor((q + d) / 2d)
-
-
-def _crossing_cells(n_steps, other, start_main, start_other, sign_main, sign_other, strict, kmax):
-    """Cells entered at the crossings of the main axis: (main index, other index), shape (n, kmax)."""
-    k = np.arange(1, kmax + 1)
-    valid = k[None, :] <= n_steps[:, None]
-    d = np.maximum(n_steps, 1)[:, None]
-    q = (2 * k[None, :] - 1) * other[:, None]
-    m = _count_below(q, d, strict)
-    main = start_main[:, None] + sign_main[:, None] * k[None, :]
-    oth = start_other[:, None] + sign_other[:, None] * m
-    return main, oth, valid
 
 
 def cells_clear(occupancy: np.ndarray, rc0, rc1) -> np.ndarray:
@@ -78,25 +60,10 @@ def cells_clear(occupancy: np.ndarray, rc0, rc1) -> np.ndarray:
     for name, x in (("rc0", a), ("rc1", b)):
         if x.size and (x[:, 0].min() < 0 or x[:, 0].max() >= h or x[:, 1].min() < 0 or x[:, 1].max() >= w):
             raise ValueError(f"{name} must lie inside the {h} x {w} grid")
-    clear = ~occ[a[:, 0], a[:, 1]] & ~occ[b[:, 0], b[:, 1]]
-    if a.shape[0] == 0:
-        return clear
-    dr, dc = b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]
-    nr, nc = np.abs(dr), np.abs(dc)
-    sr, sc = np.sign(dr), np.sign(dc)
-    kc = int(nc.max())
-    if kc:  # column crossings: cell (row after counting row crossings, col after the step)
-        for strict in (True, False):  # strict/non-strict differ only at corner crossings: both cells checked
-            cols, rows, valid = _crossing_cells(nc, nr, a[:, 1], a[:, 0], sc, sr, strict, kc)
-            rows = np.clip(rows, 0, h - 1)
-            cols = np.clip(cols, 0, w - 1)
-            clear &= ~(occ[rows, cols] & valid).any(axis=1)
-    kr = int(nr.max())
-    if kr:  # row crossings, strictly before the simultaneous column crossing
-        rows, cols, valid = _crossing_cells(nr, nc, a[:, 0], a[:, 1], sr, sc, True, kr)
-        rows = np.clip(rows, 0, h - 1)
-        cols = np.clip(cols, 0, w - 1)
-        clear &= ~(occ[rows, cols] & valid).any(axis=1)
+    from ..kernels._sight import clear_segments  # compiled on first use (numba)
+
+    clear = np.empty(a.shape[0], dtype=bool)
+    clear_segments(np.ascontiguousarray(occ), a, b, clear)
     return clear
 
 
@@ -123,8 +90,9 @@ class LineOfSightCache:
         self.capacity = int(capacity)
         self._tables: OrderedDict = OrderedDict()
 
-    def clear_from(self, origin, targets) -> np.ndarray:
-        """(n,) bool: line of sight from the ``origin`` cell (row, col) to each target cell (n, 2)."""
+    def table(self, origin) -> np.ndarray:
+        """The (H, W) int8 table of the ``origin`` cell (row, col): 1 clear, 0 blocked, −1 not traversed yet
+        (:meth:`clear_from` fills it); the cache's own array, counted as a use of the origin."""
         key = (int(origin[0]), int(origin[1]))
         table = self._tables.get(key)
         if table is None:
@@ -134,6 +102,12 @@ class LineOfSightCache:
                 self._tables.popitem(last=False)
         else:
             self._tables.move_to_end(key)
+        return table
+
+    def clear_from(self, origin, targets) -> np.ndarray:
+        """(n,) bool: line of sight from the ``origin`` cell (row, col) to each target cell (n, 2)."""
+        key = (int(origin[0]), int(origin[1]))
+        table = self.table(key)
         t = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
         known = table[t[:, 0], t[:, 1]]
         todo = known < 0

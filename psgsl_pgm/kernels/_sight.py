@@ -1,4 +1,8 @@
-"""The shadow cast of :func:`psgsl_pgm.geometry._sight.visible_from`, compiled: every cell seen from one cell centre.
+"""Line of sight, compiled: the shadow cast of :func:`psgsl_pgm.geometry._sight.visible_from` (every cell seen
+from one cell centre) and the segment traversal of :func:`psgsl_pgm.geometry._sight.cells_clear`
+(:func:`segment_clear`, one segment between two cell centres).
+
+The shadow cast:
 
 Ring by ring around the viewpoint (Chebyshev distance k = 0, 1, …): a candidate cell of ring k is seen when
 its direction lies in no shadow cast by the occupied cells of rings < k (and, at a ring's diagonal, neither
@@ -24,7 +28,7 @@ import numpy as np
 from . import _cache as _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
 from ._view import _exact
 
-__all__ = ["cast"]
+__all__ = ["cast", "clear_segments", "segment_clear"]
 
 _JIT = dict(nogil=True, cache=True, error_model="numpy")
 
@@ -193,6 +197,61 @@ def _cast(occ, r0, c0, reach, mode, limit, col0, row0, res, cos_h, sin_h, cos_ha
             break
         if added > m:
             m = _merge(starts, ends, added)
+
+
+@nb.njit(inline="always", **_JIT)
+def _count_below(q, d, strict):
+    """#{j ≥ 1 : (2j − 1) d < q} (strict) or ≤ q, for integers q ≥ 0, d ≥ 1."""
+    if strict:
+        return (q + 3 * d - 1) // (2 * d) - 1  # ceil((q + d) / 2d) − 1
+    return (q + d) // (2 * d)  # floor((q + d) / 2d)
+
+
+@nb.njit(inline="always", **_JIT)
+def _crossings_clear(occ, n_main, n_other, main0, other0, s_main, s_other, strict, rows_main):
+    """No occupied cell among those entered at the n_main crossings of the main axis (k = 1 … n_main: main index
+    main0 + s_main k, other index other0 + s_other #{crossings of the other axis before it})."""
+    h, w = occ.shape
+    d = max(n_main, 1)
+    for k in range(1, n_main + 1):
+        main = main0 + s_main * k
+        other = other0 + s_other * _count_below((2 * k - 1) * n_other, d, strict)
+        r, c = (main, other) if rows_main else (other, main)
+        if occ[min(max(r, 0), h - 1), min(max(c, 0), w - 1)]:
+            return False
+    return True
+
+
+@nb.njit(**_JIT)
+def segment_clear(occ, r0, c0, r1, c1):
+    """Whether the segment between the centres of cells (r0, c0) and (r1, c1) meets no occupied cell, its two
+    end cells included: the supercover rule of :func:`psgsl_pgm.geometry._sight.cells_clear`. In grid units the
+    segment crosses the column boundaries at t = (k − ½)/|Δc| and the row boundaries at t = (j − ½)/|Δr|; the
+    cell entered at each crossing follows from counting the other axis' crossings before it (integers only).
+    At a corner crossing (equal parameters) both cells beside the corner are checked: the column crossings
+    counted strictly and not, the row crossings strictly."""
+    if occ[r0, c0] or occ[r1, c1]:
+        return False
+    dr, dc = r1 - r0, c1 - c0
+    nr, nc = abs(dr), abs(dc)
+    sr = 1 if dr > 0 else (-1 if dr < 0 else 0)
+    sc = 1 if dc > 0 else (-1 if dc < 0 else 0)
+    if nc:
+        if not _crossings_clear(occ, nc, nr, c0, r0, sc, sr, True, False):
+            return False
+        if not _crossings_clear(occ, nc, nr, c0, r0, sc, sr, False, False):
+            return False
+    if nr:
+        if not _crossings_clear(occ, nr, nc, r0, c0, sr, sc, True, True):
+            return False
+    return True
+
+
+@nb.njit(**_JIT)
+def clear_segments(occ, a, b, out):
+    """out[i] = :func:`segment_clear` from cell a[i] to cell b[i] ((n, 2) int64 (row, col) inside the grid)."""
+    for i in range(a.shape[0]):
+        out[i] = segment_clear(occ, a[i, 0], a[i, 1], b[i, 0], b[i, 1])
 
 
 def cast(occupancy, cell, *, reach, disc=None, camera=None):

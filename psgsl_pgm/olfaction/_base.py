@@ -111,14 +111,33 @@ class OlfactoryEstimator(abc.ABC):
         """Commit the state change computed by :meth:`_propose`."""
 
     def _set_log_posterior(self, log_post: np.ndarray) -> None:
+        """Set the unnormalised flat log posterior; it is normalised when first read (:attr:`_log_post`), so a
+        posterior replaced before anyone reads it (a "not found" factor and then the next reading) costs none."""
         log_post = log_post.copy()
         log_post[~self.geometry.free.ravel()] = -np.inf
-        log_post -= logsumexp(log_post)  # normalise in log space
-        log_post.flags.writeable = False
-        self._log_post = log_post
-        post = np.exp(log_post)
-        post.flags.writeable = False
-        self._post = post
+        self._unnormalised = log_post
+        self._normalised = None
+
+    @property
+    def _log_post(self) -> np.ndarray:
+        """Flat normalised log posterior (read-only)."""
+        return self._normalise()[0]
+
+    @property
+    def _post(self) -> np.ndarray:
+        """Flat posterior (read-only)."""
+        return self._normalise()[1]
+
+    def _normalise(self):
+        if self._normalised is None:
+            log_post = self._unnormalised
+            log_post -= logsumexp(log_post)  # normalise in log space
+            log_post.flags.writeable = False
+            post = np.exp(log_post)
+            post.flags.writeable = False
+            self._normalised = (log_post, post)
+            self._unnormalised = None
+        return self._normalised
 
     def update(self, position, hit, wind=None) -> np.ndarray:
         """Assimilate one reading and return the new posterior.

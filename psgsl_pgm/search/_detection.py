@@ -94,6 +94,11 @@ class DetectionModel:
         self._sizes = np.array([c.size for c in cells], dtype=np.int64)
         self._fp_points = self.centres[np.concatenate(cells)] if cells else np.empty((0, 2))
         self._fp_starts = np.concatenate([[0], np.cumsum(self._sizes)[:-1]]) if cells else np.empty(0, np.int64)
+        # each footprint's bounding box of cell centres, widened by r (and, for rounding, by 1e-9 of the largest
+        # length involved): a point outside it is farther than r from every centre of the footprint
+        pad = r + 1e-9 * (1.0 + r + (float(np.abs(self.centres).max()) if n else 0.0))
+        self._fp_boxes = np.array([[*(self.centres[c].min(axis=0) - pad), *(self.centres[c].max(axis=0) + pad)]
+                                   if c.size else [np.inf, np.inf, -np.inf, -np.inf] for c in cells]).reshape(-1, 4)
         owned = owner >= 0
         self._owned = sp.csr_matrix((np.ones(int(owned.sum())), (owner[owned], np.flatnonzero(owned))),
                                     shape=(len(masks), n))  # (J, n) indicator of the cells each object owns
@@ -131,10 +136,13 @@ class DetectionModel:
         """(p, J) bool: whether each point lies within r of each footprint (of any of its cells' centres)."""
         p = self._points(points)
         out = np.zeros((len(p), len(self._sizes)), dtype=bool)
-        has = self._sizes > 0
         if self._fp_points.shape[0] and len(p):
-            within = _d2(p[:, None, :], self._fp_points[None, :, :]) <= self.found_radius**2  # (p, M)
-            out[:, has] = np.logical_or.reduceat(within, self._fp_starts[has], axis=1)
+            b = self._fp_boxes
+            inside = ((p[:, :1] >= b[:, 0]) & (p[:, :1] <= b[:, 2]) & (p[:, 1:] >= b[:, 1]) & (p[:, 1:] <= b[:, 3]))
+            for j in np.flatnonzero(inside.any(axis=0)).tolist():  # the footprints within reach (a handful)
+                k = np.flatnonzero(inside[:, j])
+                fp = self._fp_points[self._fp_starts[j] : self._fp_starts[j] + self._sizes[j]]
+                out[k, j] = (_d2(p[k][:, None, :], fp[None, :, :]) <= self.found_radius**2).any(axis=1)
         return out
 
     def found(self, points, source_cell: int) -> np.ndarray:

@@ -39,7 +39,7 @@ import numpy as np
 
 from .._shared._validate import index, positive, real_pair, unit_interval
 from ..experiment._config import VARIANTS, ExperimentConfig
-from ..experiment._metrics import error_and_spread
+from ..experiment._metrics import _error_and_spread
 from ..experiment._step import VariantPosteriors, start_run, visit
 from ..experiment._tour import exploration_tour
 from ._detection import DetectionModel
@@ -272,10 +272,10 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     if space is None:
         space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
                           n_headings=search.n_headings)
-    beliefs = VariantPosteriors(world, estimator, config, setting=setting)
+    beliefs = VariantPosteriors(world, estimator, config, setting=setting, variants=(variant,))
     tour = exploration_tour(house, start=start_xy, clearance=search.clearance)
     plan = _tour_plan(tour) if policy == "tour" else None
-    centres = house.grid.cell_centres()
+    centres = house.grid.cell_centres().reshape(-1, 2)
     truth = world.source
     r = search.found_radius
     sense_time = world.gas_sensor.window
@@ -301,7 +301,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
 
     def record(pos, heading, hit, length):
         post = beliefs.posteriors((variant,))[0]
-        err, spr = error_and_spread(post[None], centres, truth)
+        err, spr = _error_and_spread(post.reshape(1, -1), centres, truth)  # metrics of a valid posterior
         best = int(np.argmax(post))
         region = credible_region(post, search.credible)
         rec["time"].append(world.time - t0)

@@ -200,24 +200,63 @@ def _found_mass(sit: Situation, cells):
     return model.found_probability(sit.posterior, rows), rows
 
 
-def _hit_blocks(sit: Situation, cells) -> list:
-    """Per candidate cell, the (3, H·W) static rows [P(hit at the cell | s), H_b = entr(P) + entr(1 − P),
-    entr(P)], cached per cell for the run (they depend on the map and the estimator's plume model only, and are
-    emptied when that model is re-solved with a new wind estimate)."""
+def _hit_rows(sit: Situation, cells) -> list:
+    """Per candidate cell, the (H·W,) static row P(hit at the cell | s), cached per cell for the run with its
+    per-tile extremes (they depend on the map and the estimator's plume model only; the cache is emptied when
+    that model is re-solved with a new wind estimate). The rows of the cells not cached yet are solved together,
+    in the order given."""
     model = sit.beliefs.estimator.model
     if sit.cache.get("model") is not model:
         sit.cache.clear()
         sit.cache["model"] = model
     cells = np.asarray(cells).tolist()
-    missing = [c for c in cells if c not in sit.cache]
+    missing = [c for c in cells if ("row", c) not in sit.cache]
     if missing:
         p = sit.beliefs.estimator.hit_probability(sit.space.position(missing)).reshape(len(missing), -1)
-        for c, row in zip(missing, p):
+        # per tile: [lo_t, hi_t, min(H_b(lo_t), H_b(hi_t))], and [0, 1, 0] for the cells that are not free
+        stats = np.empty((len(missing), 3, sit.space.n_tiles + 1))
+        stats[:, 0, :-1], stats[:, 1, :-1] = sit.space.tile_extremes(p)
+        stats[:, :, -1] = (0.0, 1.0, 0.0)
+        low, high = stats[:, 0, :-1], stats[:, 1, :-1]
+        stats[:, 2, :-1] = np.minimum(entr(low) + entr(1.0 - low), entr(high) + entr(1.0 - high))
+        for c, row, st in zip(missing, p, stats):
+            row.flags.writeable = False
+            st.flags.writeable = False
+            sit.cache[("row", c)] = row
+            sit.cache[("tiles", c)] = st
+    return [sit.cache[("row", c)] for c in cells]
+
+
+def _hit_blocks(sit: Situation, cells) -> list:
+    """Per candidate cell, the (3, H·W) static rows [P(hit at the cell | s), H_b = entr(P) + entr(1 − P),
+    entr(P)], cached per cell for the run (built from :func:`_hit_rows`)."""
+    rows = _hit_rows(sit, cells)
+    out = []
+    for c, row in zip(np.asarray(cells).tolist(), rows):
+        block = sit.cache.get(c)
+        if block is None:
             e1 = entr(row)
             block = np.stack([row, e1 + entr(1.0 - row), e1])
             block.flags.writeable = False
             sit.cache[c] = block
-    return [sit.cache[c] for c in cells]
+        out.append(block)
+    return out
+
+
+def _olfactory_bound(sit: Situation, cells) -> np.ndarray:
+    """(K,) an upper bound of the computed φ_G of each candidate cell (:func:`olfactory_gain`).
+
+    With m_t the posterior mass of tile t (:attr:`FreeSpace.tile`; the tile of the cells that are not free
+    taken as P ∈ [0, 1]) and P = P(hit | s) ∈ [lo_t, hi_t] on its cells (static, :func:`_hit_rows`):
+    p̄ = Σ_s p(s) P(s) ∈ [L, U] = [Σ m_t lo_t, Σ m_t hi_t] and, H_b being concave,
+    Σ_s p(s) H_b(P(s)) ≥ Σ m_t min(H_b(lo_t), H_b(hi_t)); so φ_G ≤ max_{[L, U]} H_b − Σ m_t min(H_b(lo_t),
+    H_b(hi_t)) (the maximum at ½ when it lies in [L, U]), plus 1e-9, far above the rounding of either side
+    (≲ 1e-12 for sums of 1e4 terms)."""
+    _hit_rows(sit, cells)
+    stats = np.stack([sit.cache[("tiles", c)] for c in np.asarray(cells).tolist()])  # (K, 3, T + 1)
+    low, high, h_low = np.moveaxis(stats @ sit.space.tile_sums(sit.posterior.ravel()), 1, 0)
+    p = np.clip(np.minimum(np.maximum(0.5, low), high), 0.0, 1.0)
+    return np.maximum(entr(p) + entr(1.0 - p) - h_low, 0.0) + 1e-9
 
 
 def _finite_distances(sit: Situation, cell: int) -> np.ndarray:
@@ -240,15 +279,21 @@ def olfactory_gain(sit: Situation, cells) -> np.ndarray:
     return np.maximum(entr(p_bar) + entr(1.0 - p_bar) - dots[:, 1], 0.0)
 
 
-def _view_information(sit: Situation, cells) -> np.ndarray:
-    """φ_O for every candidate × heading (zeros for the olfaction variant)."""
+def _semantic_gain(sit: Situation):
+    """(H·W,) I(S; O_n) of every cell under the variant's beliefs (exact predictive), None for olfaction."""
+    if sit.variant == "olfaction":
+        return None
+    b = sit.beliefs
+    return semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,
+                                     olfactory=b.estimator.posterior, predictive="exact").ravel()
+
+
+def _view_information(sit: Situation, cells, gain=None) -> np.ndarray:
+    """φ_O for every candidate × heading (zeros for the olfaction variant); ``gain``: :func:`_semantic_gain`, if
+    computed already."""
     if sit.variant == "olfaction":
         return np.zeros((len(cells), len(sit.space.headings)))
-
-    b = sit.beliefs
-    gain = semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,
-                                     olfactory=b.estimator.posterior, predictive="exact")
-    return sit.space.view_gain(gain.ravel(), cells)
+    return sit.space.view_gain(_semantic_gain(sit) if gain is None else gain, cells)
 
 
 def _best(score, cells, pred, drive, sit, *, headings=None):
@@ -265,7 +310,48 @@ def infotaxis_gain(sit: Situation, cells):
     phi_g = olfactory_gain(sit, cells)
     phi_o = _view_information(sit, cells)
     h = float(entr(sit.posterior).sum())
+    return _infotaxis_formula(p_f, h, phi_g, phi_o)
+
+
+def _infotaxis_formula(p_f, h, phi_g, phi_o):
+    """P_f H + (1 − P_f)(φ_G + φ_O), (K, n_headings), the same floating-point operations for every candidate."""
     return p_f[:, None] * h + (1.0 - p_f[:, None]) * (phi_g[:, None] + phi_o)
+
+
+_CHUNK = 8  # candidates evaluated together by _choose_infotaxis
+
+
+def _choose_infotaxis(sit: Situation) -> Decision:
+    """The infotaxis decision, the best-scoring pose of :func:`infotaxis_gain`, by branch and bound.
+
+    Every candidate's score has an upper bound: G ≤ P_f H + (1 − P_f)(B_G + B_O), with B_G ≥ φ_G
+    (:func:`_olfactory_bound`) and B_O ≥ φ_O at every heading (:meth:`FreeSpace.view_bound`), through the same monotone floating-point operations and the same
+    scoring rule as the score itself (so it bounds the *computed* score). The candidates are evaluated exactly
+    — φ_G and φ_O, each candidate's own products, the very numbers of :func:`infotaxis_gain` — from the highest
+    bound down, until the next bound is below the best score found; the others cannot win. The winner is the
+    first maximum in lattice order among the evaluated ones, the candidate :func:`infotaxis_gain` would pick.
+    """
+    cells, drive, pred, tau = _candidates(sit)
+    p_f, _ = _found_mass(sit, cells)
+    h = float(entr(sit.posterior).sum())
+    gain = _semantic_gain(sit)
+    b_o = np.zeros(len(cells)) if gain is None else sit.space.view_bound(gain, cells)
+    bound = _score(sit, _infotaxis_formula(p_f, h, _olfactory_bound(sit, cells), b_o[:, None]), tau).max(axis=1)
+    score = np.full(tau.shape, -np.inf)
+    if np.isfinite(bound).all() and (p_f <= 1.0).all():  # else (1 − P_f) < 0 or no bound: evaluate every candidate
+        order = np.argsort(-bound, kind="stable")
+    else:
+        order, bound = np.arange(len(cells)), np.full(len(cells), np.inf)
+    best = -np.inf
+    for start in range(0, len(order), _CHUNK):
+        k = order[start : start + _CHUNK]
+        k = k[bound[k] >= best]
+        if k.size == 0:
+            break
+        phi_o = _view_information(sit, cells[k], gain)
+        score[k] = _score(sit, _infotaxis_formula(p_f[k], h, olfactory_gain(sit, cells[k]), phi_o), tau[k])
+        best = max(best, float(score[k].max()))
+    return _best(score, cells, pred, drive, sit)
 
 
 def space_aware_gain(sit: Situation, cells):
@@ -393,8 +479,7 @@ def choose(policy: str, sit: Situation) -> Decision:
     if policy == "semantic-modes":
         return _semantic_step(sit)
     if policy == "infotaxis":
-        cells, drive, pred, tau = _candidates(sit)
-        return _best(_score(sit, infotaxis_gain(sit, cells), tau), cells, pred, drive, sit)
+        return _choose_infotaxis(sit)
     if policy == "space-aware-infotaxis":
         cells, drive, pred, tau = _candidates(sit)
         return _best(_score(sit, space_aware_gain(sit, cells), tau), cells, pred, drive, sit)

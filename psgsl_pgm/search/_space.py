@@ -14,7 +14,7 @@ same for every seed), and is split into the heading sectors by the same cone tes
 
 from __future__ import annotations
 
-from collections import OrderedDict
+from collections import OrderedDict, deque
 
 import numpy as np
 from scipy import ndimage as ndi
@@ -24,6 +24,8 @@ from ..geometry._fov import ViewCache
 from ..geometry._grid import free_space_graph
 
 __all__ = ["FreeSpace"]
+
+_TILE = 5  # cells per side of the tiles of FreeSpace.view_bound
 
 
 
@@ -53,6 +55,9 @@ class FreeSpace:
     headings : (n_headings,) ndarray
     lattice : (H, W) bool
         Navigable lattice cells (candidate positions).
+    tile : (H·W,) ndarray of int
+        The tile of each cell for the policies' bounds: the free cells of a block of 5 × 5 cells form a tile
+        (numbered 0 … ``n_tiles`` − 1), every other cell is in tile ``n_tiles``.
     """
 
     def __init__(self, house, camera, *, clearance: float = 0.25, spacing: float = 0.5, n_headings: int = 8,
@@ -77,8 +82,20 @@ class FreeSpace:
         self._nearest_nav = (ri * self.nav.shape[1] + ci).ravel()
         self._offset = np.linalg.norm(self.centres - self.centres[self._nearest_nav], axis=1)
         self._dist_cache: OrderedDict = OrderedDict()
+        self._reach_cache: OrderedDict = OrderedDict()
+        self._candidate_keys: deque = deque()  # the cached candidate sets, oldest first
         self._discs: dict = {}
         self._dist_cache_max = int(distance_cache)
+        # tiles: the free cells of each block of _TILE × _TILE cells (numbered 0 … T − 1, every one non-empty), and
+        # tile T holding every other cell; the cells sorted by tile, for per-tile reductions
+        rows, cols = np.indices(self.nav.shape)
+        block = ((rows // _TILE) * -(-self.nav.shape[1] // _TILE) + cols // _TILE).ravel()
+        used, index = np.unique(block[self.free], return_inverse=True)
+        self.n_tiles = int(used.size)
+        self.tile = np.full(self.free.size, self.n_tiles, dtype=np.int64)
+        self.tile[self.free] = index
+        self._tile_order = np.argsort(self.tile, kind="stable")[: int(self.free.sum())]
+        self._tile_starts = np.searchsorted(self.tile[self._tile_order], np.arange(self.n_tiles))
         self._sight = ViewCache.shared(grid.occupancy, max_range=camera.max_range, half_angle=camera.half_angle,
                                        min_range=camera.min_range, resolution=grid.resolution, origin=grid.origin)
         self._views: dict = {}  # cell -> (flat cells, (n_headings, m) bool sectors)
@@ -99,8 +116,20 @@ class FreeSpace:
 
     # --- geodesics ---------------------------------------------------------------------------------------
     def reach(self, cell: int, horizon: float):
-        """Geodesic distances (H·W,) from ``cell`` (inf beyond ``horizon``) and Dijkstra predecessors."""
-        return dijkstra(self.graph, indices=int(cell), limit=float(horizon), return_predecessors=True)
+        """Geodesic distances (H·W,) from ``cell`` (inf beyond ``horizon``) and Dijkstra predecessors (cached,
+        read-only; the graph never changes)."""
+        key = (int(cell), float(horizon))
+        hit = self._reach_cache.get(key)
+        if hit is None:
+            hit = dijkstra(self.graph, indices=key[0], limit=key[1], return_predecessors=True)
+            for a in hit:
+                a.flags.writeable = False
+            self._reach_cache[key] = hit
+            if len(self._reach_cache) > self._dist_cache_max:
+                self._reach_cache.popitem(last=False)
+        else:
+            self._reach_cache.move_to_end(key)
+        return hit
 
     @staticmethod
     def path(pred: np.ndarray, target: int) -> np.ndarray:
@@ -167,7 +196,13 @@ class FreeSpace:
             Their geodesic distances, m.
         pred : (H·W,) ndarray
             Dijkstra predecessors from ``cell`` (for :meth:`path`).
+
+        The three arrays are cached per cell and settings, and read-only.
         """
+        key = ("candidates", int(cell), float(horizon), None if far_spacing is None else float(far_spacing))
+        hit = self._discs.get(key)
+        if hit is not None:  # the same geometry every time the robot is back in this cell
+            return hit
         dist, pred = self.reach(cell, horizon if far_spacing is None else np.inf)
         near = np.isfinite(dist) & (dist <= horizon)
         lat = np.flatnonzero(self.lattice.ravel() & near)
@@ -177,7 +212,14 @@ class FreeSpace:
         cells = lat[lat != cell]
         if cells.size == 0:
             cells = np.array([int(cell)])
-        return cells, dist[cells], pred
+        hit = (cells, dist[cells], pred)
+        for a in hit[:2]:
+            a.flags.writeable = False
+        if len(self._candidate_keys) >= self._dist_cache_max:
+            self._discs.pop(self._candidate_keys.popleft(), None)
+        self._candidate_keys.append(key)
+        self._discs[key] = hit
+        return hit
 
     def disc(self, cell: int, radius: float) -> np.ndarray:
         """Flat indices of the cells whose centre lies within ``radius`` of ``cell``'s centre (cached)."""
@@ -229,3 +271,37 @@ class FreeSpace:
             flat, sectors = self.view(cell)
             out[k] = sectors @ gain_flat[flat]
         return out
+
+    def view_bound(self, gain_flat: np.ndarray, cells) -> np.ndarray:
+        """(K,) an upper bound of |φ_O| at every heading of each candidate cell: Σ |gain| over the tiles of
+        :data:`_TILE` × :data:`_TILE` cells that its view touches, times 1 + 1e-9 (far above the relative
+        rounding of either sum, ≤ 1e-12 for views of fewer than a million cells). Not finite when the gains are
+        not."""
+        sums = self.tile_sums(np.abs(gain_flat))
+        tiles = [self._view_tiles(c) for c in np.asarray(cells).tolist()]
+        sizes = np.array([t.size for t in tiles], dtype=np.int64)
+        out = np.zeros(len(tiles))
+        if sizes.sum():
+            starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+            nz = sizes > 0
+            out[nz] = np.add.reduceat(sums[np.concatenate(tiles)], starts[nz])
+        return out * (1.0 + 1e-9)
+
+    def tile_sums(self, values) -> np.ndarray:
+        """(T + 1,) the sum of (H·W,) ``values`` over each tile (the last: every cell that is not free)."""
+        return np.bincount(self.tile, weights=values, minlength=self.n_tiles + 1)
+
+    def tile_extremes(self, rows):
+        """((M, T), (M, T)) the minimum and the maximum of (M, H·W) ``rows`` over the free cells of each tile."""
+        vals = np.asarray(rows)[:, self._tile_order]
+        return (np.minimum.reduceat(vals, self._tile_starts, axis=1),
+                np.maximum.reduceat(vals, self._tile_starts, axis=1))
+
+    def _view_tiles(self, cell: int) -> np.ndarray:
+        """The tiles that the view of ``cell`` touches (cached with the view)."""
+        hit = self._discs.get(("tiles", cell))
+        if hit is None:
+            hit = np.unique(self.tile[self.view(cell)[0]])
+            hit.flags.writeable = False
+            self._discs[("tiles", cell)] = hit
+        return hit

@@ -11,6 +11,8 @@ as the grid lives) and pose: a robot that looks again from the same pose does no
 
 from __future__ import annotations
 
+import functools
+
 import weakref
 from dataclasses import dataclass
 
@@ -122,14 +124,24 @@ class Frame:
     classes: tuple
 
 
-def _true_classes(house, classes, layer_edges):
-    """House class map (2-D or voxel) re-indexed into ``classes`` (absent classes -> ``other``)."""
-    idx = match_names(house.classes, classes)
+@functools.lru_cache(maxsize=64)
+def _class_index(house_classes: tuple, classes: tuple) -> np.ndarray:
+    """Index into ``classes`` of each of the house's classes (absent classes -> ``other``), read-only."""
+    idx = match_names(house_classes, classes)
     if OTHER not in classes:
         raise ValueError(f"classes must include {OTHER!r}, got {classes}")
     idx = np.where(idx < 0, list(classes).index(OTHER), idx)
-    cmap = house.class_map if layer_edges is None else house.voxel_class_map(layer_edges)
-    return idx[cmap]
+    idx.flags.writeable = False
+    return idx
+
+
+def _true_classes(house, classes, layer_edges, cells):
+    """The true class of each of the (n, 2) ``cells`` (the 2-D class map; (n, L) for a voxel map), indexed into
+    ``classes``."""
+    idx = _class_index(tuple(house.classes), tuple(classes))
+    if layer_edges is None:
+        return idx[house.class_map[cells[:, 0], cells[:, 1]]]
+    return idx[house.voxel_class_map(layer_edges)[cells[:, 0], cells[:, 1]]]
 
 
 def take_frame(house, pose, *, camera: Camera, detector: DetectorModel, rng, model: DetectorModel | None = None,
@@ -162,16 +174,16 @@ def take_frame(house, pose, *, camera: Camera, detector: DetectorModel, rng, mod
     g = house.grid
     cells = np.stack(np.divmod(camera._visible_flat(g, pose), g.shape[1]), axis=-1)  # np.argwhere of the view
     dist = np.linalg.norm(g.cell_to_world(cells) - pose[:2], axis=-1)
-    truth = _true_classes(house, detector.classes, layer_edges)
+    truth = _true_classes(house, detector.classes, layer_edges, cells)
     layers = None
     if layer_edges is None:
-        true_c = truth[cells[:, 0], cells[:, 1]]
+        true_c = truth
     else:
         edges = np.asarray(layer_edges, dtype=np.float64)
         in_view = camera.voxels_in_view(dist, (edges[:-1] + edges[1:]) / 2)  # (n, L)
         ci, layers = np.nonzero(in_view)
         cells, dist = cells[ci], dist[ci]
-        true_c = truth[cells[:, 0], cells[:, 1], layers]
+        true_c = truth[ci, layers]
     labels = detector.sample(true_c, dist, rng)
     lik = model.likelihood(labels, dist)
     return Frame(pose, cells, layers, dist, labels, lik, detector.classes)

@@ -1,4 +1,5 @@
-"""GADEN's filament gas-dispersion model in 2-D, vectorised over filaments.
+"""GADEN's filament gas-dispersion model in 2-D (the loops over the filaments compiled,
+:mod:`psgsl_pgm.kernels._filaments`).
 
 Each time step (as GADEN's ``filament_simulator``): new filaments are released at the source at
 ``release_rate``; every filament moves by the local wind (nearest cell of the snapshot in force) times dt
@@ -12,7 +13,8 @@ and the concentration at a point x is (GADEN's player, with the filament's line 
     C(x) = Σ_f ppm_centre · (σ0 / σ_f)³ · exp(−|x − x_f|² / 2σ_f²)    over filaments with |x − x_f| < 5 σ_f.
 
 Line of sight is between the centres of the query cell and the filament's cell (exact traversal, cached per
-query cell; see :mod:`psgsl_pgm.geometry._sight`).
+query cell; see :mod:`psgsl_pgm.geometry._sight`). A gas sensor's window — n steps, each followed by a
+concentration at the sensor — is one compiled pass (:meth:`FilamentModel.sample`).
 """
 
 from __future__ import annotations
@@ -188,66 +190,8 @@ class FilamentModel:
         return self.births.size
 
     # --- dynamics ---------------------------------------------------------------------------------------
-    # Per step the filaments are whole arrays: flat cell indices with take and boolean selections with
-    # compress (much cheaper than fancy indexing of (F, 2) arrays), and the per-filament arithmetic is
-    # the same element-wise IEEE operations in the same order as the plain formulas in the docstrings.
-    def _cells_of(self, xy) -> np.ndarray:
-        """(n, 2) int64 (row, col) of (n, 2) points, as :meth:`GridMap.world_to_cell` (no validation)."""
-        return np.floor((xy - self._origin) / self.grid.resolution).astype(np.int64)[:, ::-1]
-
-    def _walls_at(self, r, q) -> np.ndarray:
-        """Whether cells (r, q) are walls; indices outside the map are clipped to its border."""
-        h, w = self._walls.shape
-        flat = np.minimum(np.maximum(r, 0), h - 1) * w + np.minimum(np.maximum(q, 0), w - 1)
-        return self._walls_flat.take(flat)
-
-    def _blocked_short(self, p0, p1, c0, c1) -> np.ndarray:
-        """Moves of less than one cell per axis: is any cell on the path (after the first) a wall?
-
-        The end cell, and for a diagonal move the cell of the boundary crossed first (column boundary at
-        fraction t_x of the move, row boundary at t_y; both at a corner).
-        """
-        r0, q0, r1, q1 = c0[:, 0], c0[:, 1], c1[:, 0], c1[:, 1]
-        blocked = self._walls_at(r1, q1)
-        i = ((r1 != r0) & (q1 != q0)).nonzero()[0]  # diagonal moves
-        if i.size:
-            a, b, ci0, ci1 = p0.take(i, axis=0), p1.take(i, axis=0), c0.take(i, axis=0), c1.take(i, axis=0)
-            corner = self._origin + np.maximum(ci0, ci1)[:, ::-1] * self.grid.resolution  # boundaries crossed
-            t = (corner - a) / (b - a)  # (t_x, t_y)
-            tx, ty = t[:, 0], t[:, 1]
-            blocked[i] |= (((tx <= ty) & self._walls_at(ci0[:, 0], ci1[:, 1]))
-                           | ((ty <= tx) & self._walls_at(ci1[:, 0], ci0[:, 1])))
-        return blocked
-
-    def _blocked(self, p0, p1, c0) -> tuple[np.ndarray, np.ndarray]:
-        """(blocked, end cells) for moves p0 -> p1 starting in cells c0.
-
-        A move of less than one cell per axis is checked as it is (:meth:`_blocked_short`); a longer one (jets
-        at windows) as n sub-moves of less than one cell per axis, sub-move k ending at a + (b − a) min(k / n, 1):
-        it is blocked if the first sub-move that meets a wall or leaves the map meets a wall. Every (sub-)move
-        is checked in one pass.
-        """
-        f = p0.shape[0]
-        c1 = self._cells_of(p1)
-        d = np.abs(p1 - p0)
-        steps = np.ceil(np.maximum(d[:, 0], d[:, 1]) / (0.999 * self.grid.resolution))
-        long_ = (steps > 1).nonzero()[0]
-        if not long_.size:
-            return self._blocked_short(p0, p1, c0, c1), c1
-        n = steps[long_].astype(np.int64)
-        a, b, ca = p0.take(long_, axis=0), p1.take(long_, axis=0), c0.take(long_, axis=0)
-        m = a.shape[0]
-        k = np.arange(1, int(n.max()) + 1)[:, None]
-        ends = (a + (b - a) * np.minimum(k / n, 1.0)[..., None]).reshape(-1, 2)  # (K·m, 2), sub-move-major
-        cells = self._cells_of(ends)
-        blocked = self._blocked_short(np.concatenate([p0, a, ends[:-m]]), np.concatenate([p1, ends]),
-                                      np.concatenate([c0, ca, cells[:-m]]), np.concatenate([c1, cells]))
-        wall = blocked[f:].reshape(-1, m)
-        event = wall | ~self.grid.contains(cells).reshape(-1, m)  # met a wall, or left the map
-        blocked = blocked[:f]
-        blocked[long_] = wall[np.argmax(event, axis=0), np.arange(m)]  # the first event (none: not blocked)
-        return blocked, c1
-
+    # The per-filament loops are compiled (psgsl_pgm.kernels._filaments): the same IEEE operations in the same
+    # order as the plain formulas in the docstrings, the noise drawn from this model's generator in the same order.
     def release(self, count: int) -> None:
         """Add ``count`` filaments at the source, born now."""
         if count <= 0:
@@ -258,35 +202,77 @@ class FilamentModel:
         self.n_released += count
 
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` time steps."""
+        """Advance ``n`` time steps.
+
+        Per step: the filaments due by then are released at the source (⌊t · rate⌋ exist after time t); every
+        filament moves by the wind of its cell (the snapshot in force) times dt plus Gaussian noise of
+        ``noise_std`` per axis; a move that meets a wall is skipped (a move of more than one cell per axis, a jet
+        at a window, is checked as sub-moves of less than one cell: the first sub-move that meets a wall or
+        leaves the map decides); a filament that ends in an outlet or off the map is removed.
+        """
+        from ..kernels._filaments import steps
+
+        n = int(n)
+        if n > 0:
+            self._advance(steps, n)
+
+    def _due(self, n: int) -> int:
+        """Filaments released by the next ``n`` steps (⌊(step + 1) dt · rate + 1e-9⌋ is non-decreasing)."""
+        p = self.params
+        return max(math.floor((self._step + n) * p.dt * p.release_rate + 1e-9) - self.n_released, 0)
+
+    def _advance(self, kernel, n: int, *extra) -> None:
+        """Run ``kernel`` (:mod:`psgsl_pgm.kernels._filaments`) over ``n`` steps on arrays with room for the
+        filaments released meanwhile, then keep its survivors."""
         p = self.params
         h, w = self.grid.shape
-        stays = self._stays_flat
-        for _ in range(int(n)):
-            # releases so that floor(t · rate) filaments exist after time t (exact for any rate)
-            self.release(math.floor((self._step + 1) * p.dt * p.release_rate + 1e-9) - self.n_released)
-            vel = self.wind.velocities[self.wind.index(self.time)].reshape(-1, 2)
-            x0, c0 = self.positions, self._cells
-            disp = vel.take(c0[:, 0] * w + c0[:, 1], axis=0) * p.dt
-            disp += self._rng.normal(0.0, p.noise_std, size=c0.shape)
-            pos = x0 + disp
-            blocked, cells = self._blocked(x0, pos, c0)
-            i = blocked.nonzero()[0]
-            if i.size:  # a move into a wall is skipped
-                pos[i] = x0[i]
-                cells[i] = c0[i]
-            # outlets and the border remove: a table of the cells that keep a filament, with a removing border
-            r = np.minimum(np.maximum(cells[:, 0] + 1, 0), h + 1)
-            q = np.minimum(np.maximum(cells[:, 1] + 1, 0), w + 1)
-            keep = stays.take(r * (w + 2) + q)
-            kept = int(np.count_nonzero(keep))
-            if kept < keep.size:
-                self.n_removed += keep.size - kept
-                pos, cells = pos.compress(keep, axis=0), cells.compress(keep, axis=0)
-                self.births = self.births.compress(keep)
-            self.positions, self._cells = pos, cells
-            self._step += 1
-            self.time = self._step * p.dt
+        live = self.births.size
+        capacity = live + self._due(n)
+        pos = np.empty((capacity, 2))
+        births = np.empty(capacity)
+        cells = np.empty((capacity, 2), dtype=np.int64)
+        pos[:live] = self.positions
+        births[:live] = self.births
+        cells[:live] = self._cells
+        stack = self.wind.velocities
+        velocities = np.ascontiguousarray(stack).reshape(stack.shape[0], -1, 2)
+        (sr, sq), (ox, oy) = self._source_cell[0], self._origin
+        live, self.n_released, removed = kernel(
+            self._rng, n, self._step, float(self.time), self.n_released, pos, births, cells, live, velocities,
+            float(self.wind.period), float(p.dt), float(p.release_rate), float(p.noise_std), float(self.source[0]),
+            float(self.source[1]), int(sr), int(sq), self._walls_flat, self._stays_flat, h, w, float(ox), float(oy),
+            float(self.grid.resolution), *extra)
+        self.n_removed += removed
+        self.positions, self.births, self._cells = pos[:live], births[:live], cells[:live]
+        self._step += n
+        self.time = self._step * p.dt
+
+    def sample(self, point, n: int) -> np.ndarray:
+        """Advance ``n`` time steps and return the concentration at ``point`` after each, (n,) ppm: the same
+        numbers as ``n`` × (:meth:`step`, :meth:`concentration`), in one compiled pass (a gas sensor's window).
+
+        Parameters
+        ----------
+        point : (2,) array_like
+            (x, y) in metres, inside the map.
+        n : int
+            Time steps (samples), at least 1.
+        """
+        from ..kernels._filaments import sample
+
+        n = int(n)
+        if n < 1:
+            raise ValueError(f"n must be a positive number of samples, got {n!r}")
+        pts, cells = self._cells_inside(point)
+        if len(pts) != 1:
+            raise ValueError(f"point must be one (x, y) pair in metres, got shape {np.shape(point)}")
+        (x, y), (r, c) = pts[0].tolist(), cells[0].tolist()
+        p = self.params
+        room = n * (self.births.size + self._due(n))  # every filament may reach the point after every step
+        neg_arg, var, ends = np.empty(room), np.empty(room), np.empty(n, dtype=np.int64)
+        self._advance(sample, n, x, y, r, c, p.sigma0**2, p.gamma, p.cutoff**2, self._walls, self._los.table((r, c)),
+                      neg_arg, var, ends)
+        return self._sums(neg_arg, var, ends)
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole steps)."""
@@ -312,28 +298,48 @@ class FilamentModel:
         -------
         (n,) or () ndarray
         """
-        pts = np.asarray(points, dtype=np.float64)
-        single = pts.ndim == 1
-        pts = pts.reshape(-1, 2)
-        rc = self._cells_of(pts)
+        from ..kernels._filaments import near
+
+        single = np.ndim(points) == 1
+        pts, rc = self._cells_inside(points)
+        p = self.params
+        live = self.births.size
+        pos = np.ascontiguousarray(self.positions, dtype=np.float64)
+        births = np.ascontiguousarray(self.births, dtype=np.float64)
+        cells = np.ascontiguousarray(self._cells, dtype=np.int64)
+        neg_arg, var = np.empty(len(pts) * live), np.empty(len(pts) * live)
+        ends = np.empty(len(pts), dtype=np.int64)
+        end = 0
+        for i, ((x, y), (r, c)) in enumerate(zip(pts.tolist(), rc.tolist())):
+            end += near(pos, births, cells, live, x, y, r, c, float(self.time), p.sigma0**2, p.gamma, p.cutoff**2,
+                        self._walls, self._los.table((r, c)), neg_arg[end:], var[end:])
+            ends[i] = end
+        out = self._sums(neg_arg, var, ends)
+        return out[0] if single else out
+
+    def _cells_inside(self, points):
+        """((n, 2) points, (n, 2) int64 (row, col) of their cells) of map-frame points; ValueError off the map."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        rc = np.floor((pts - self._origin) / self.grid.resolution).astype(np.int64)[:, ::-1]
         h, w = self.grid.shape
         if not ((rc[:, 0] >= 0) & (rc[:, 0] < h) & (rc[:, 1] >= 0) & (rc[:, 1] < w)).all():
             raise ValueError(f"points must lie inside the map {self.grid.extent}")
+        return pts, rc
+
+    def _sums(self, neg_arg, var, ends) -> np.ndarray:
+        """C = Σ_f ppm_centre (σ0/σ_f)³ exp(−|x − x_f|² / 2σ_f²) over each point's filaments (the kernels list
+        −|x − x_f|² / 2σ_f² and σ_f², the points' runs ending at ``ends``): (len(ends),) ppm, numpy's exp, power and
+        pairwise sum (elementwise, so the same numbers whichever filaments share the arrays)."""
         p = self.params
-        s2 = p.sigma0**2 + p.gamma * (self.time - self.births)  # σ² = σ0² + γ (t − t_b)
-        amp = p.ppm_center * (p.sigma0**2 / s2) ** 1.5  # ppm_centre (σ0/σ)³
-        reach2 = p.cutoff**2 * s2
-        fx, fy = self.positions[:, 0], self.positions[:, 1]
-        out = np.zeros(len(pts))
-        for i, ((x, y), rcq) in enumerate(zip(pts.tolist(), rc)):
-            dx, dy = fx - x, fy - y
-            d2 = dx * dx + dy * dy  # |x − x_f|²
-            near = (d2 < reach2).nonzero()[0]
-            if near.size == 0:
-                continue
-            near = near[self._los.clear_from(rcq, self._cells.take(near, axis=0))]
-            out[i] = np.sum(amp[near] * np.exp(-d2[near] / (2 * s2[near])))
-        return out[0] if single else out
+        n = int(ends[-1]) if len(ends) else 0
+        terms = p.ppm_center * (p.sigma0**2 / var[:n]) ** 1.5 * np.exp(neg_arg[:n])  # ppm_centre (σ0/σ)³ exp(…)
+        out = np.zeros(len(ends))
+        start = 0
+        for k, end in enumerate(ends.tolist()):  # one sum per point
+            if end > start:
+                out[k] = np.sum(terms[start:end])
+            start = end
+        return out
 
     def concentration_field(self, *, stride: int = 1) -> np.ndarray:
         """(H, W) concentration at cell centres (every ``stride``-th cell, the rest nan; walls 0).

@@ -95,10 +95,7 @@ class World:
         xy = np.asarray(xy, dtype=np.float64)
         dt = self.dt
         n = self.gas_sensor.samples(dt) if duration is None else max(1, int(round(duration / dt)))
-        samples = np.empty(n)
-        for k in range(n):  # the clock: one step per sample
-            self.gas.step()
-            samples[k] = self.gas.concentration(xy)
+        samples = self.gas.sample(xy, n)  # the clock: one step per sample
         reading = self.gas_sensor.read(samples, dt, initial=self._sensor_state, rng=self._rng_gas_sensor)
         self._sensor_state = reading.state
         return reading
