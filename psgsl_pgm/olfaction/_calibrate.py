@@ -249,12 +249,12 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
     Nelder–Mead on (log D, log τ) (``refine``). One sparse LU factorisation and one forward solve per run and
     (D, τ).
 
-    Why a point estimate (maximum likelihood) and not a posterior marginalised over (D, τ, κ): the estimator
-    would then have to carry one plume model per grid point (a factorisation and a Green's-function cache each)
-    and mix their predictions at every reading, multiplying its cost by the grid size; and with hundreds of
-    calibration readings the profile likelihood is sharply peaked (the log-likelihood drops by tens of nats
-    between neighbouring grid points), so the mixture would be dominated by one point anyway. What the point
-    estimate leaves out — correlated readings — is accounted for by the tempering (:func:`ar1_tempering`).
+    This is the one (D, τ, κ) that fits the pooled readings best. Pooled over hundreds of readings the profile
+    likelihood is sharply peaked, but that sharpness is about the population average, not about any one run:
+    fitted run by run, the parameters vary (D about three times smaller for a source in a corridor's fast
+    flow, κ fourfold between runs). :class:`GridInfotaxis` therefore marginalises over a grid of (D, τ, κ)
+    around this fit with population weights from :func:`mixture_weights` (``parameter_grid``); PMFS and the
+    residual tempering (:func:`ar1_tempering`) use the point estimate.
 
     Parameters
     ----------
