@@ -90,7 +90,7 @@ def test_run_equals_an_independent_pipeline_built_from_the_public_parts(short_ru
         return GridInfotaxis.from_grid_map(world.house.grid, a * basis, outlets=world.house.outlet,
                                            diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
                                            encounter_scale=cfg.encounter_scale, tempering=cfg.tempering,
-                                           false_hit_rate=cfg.false_hit_rate)
+                                           false_hit_rate=cfg.false_hit_rate, parameter_grid=cfg.parameter_grid)
 
     est, solved, num, den, seen = estimator(0.0), 0.0, 0.0, 0.0, []
     for j, stop, reading, wind, frames in walk(world, tour, cfg):
