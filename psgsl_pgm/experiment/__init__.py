@@ -15,8 +15,9 @@ resumable); :func:`run_demo` the command ``psgsl demo``.
 """
 
 from ..sim._house_ontology import house_ontology
-from ._calibration import CALIBRATION_RUNS, Calibration, calibrate, calibrate_encounter_scale, calibration_runs
-from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ._calibration import (CALIBRATION_RUNS, GRID_AXES, GRID_CALIBRATION_RUNS, Calibration, calibrate,
+                           calibrate_encounter_scale, calibration_runs, parameter_grid_weights)
+from ._config import ESTIMATORS, PARAMETER_GRID, VARIANTS, ExperimentConfig, parse_source
 from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
 from ._metrics import error_and_spread, mean_ci
@@ -31,9 +32,12 @@ from ._tour import Tour, exploration_tour
 
 __all__ = [
     "CALIBRATION_RUNS",
+    "GRID_AXES",
+    "GRID_CALIBRATION_RUNS",
     "Calibration",
     "DEMO_SEEDS",
     "ESTIMATORS",
+    "PARAMETER_GRID",
     "ExperimentConfig",
     "ReplayResult",
     "RunResult",
@@ -50,6 +54,7 @@ __all__ = [
     "house_ontology",
     "load_run",
     "mean_ci",
+    "parameter_grid_weights",
     "parse_source",
     "plot_error_chart",
     "plot_progression",

@@ -12,7 +12,13 @@ field — :func:`calibrate` fits
   β = n_eff / n = (1 − ρ̂)/(1 + ρ̂));
 * the exponent λ of the PMFS score (:class:`psgsl_pgm.olfaction.PMFSEstimator`, a pseudo-likelihood without
   a reading-level model whose residuals could be used), by the log score of the known sources
-  (:func:`pmfs_tempering`).
+  (:func:`pmfs_tempering`);
+* the population weights of the plume-parameter grid that :class:`psgsl_pgm.olfaction.GridInfotaxis`
+  marginalises over (:func:`parameter_grid_weights`): θ = (D, τ, κ) is a run-level unknown, and its
+  distribution over runs is what the weights estimate, so they are fitted on more runs
+  (:data:`GRID_CALIBRATION_RUNS`: the runs above, the same sources on eight more seeds, and four runs with
+  floor sources in the hallway — whose fast, channelled flow keeps plumes narrower than in the rooms; the
+  point estimate on rooms alone put D three times too high there).
 
 The values stored as :class:`ExperimentConfig` defaults are this fit's, rounded to three significant digits;
 ``benchmarks/calibrate_olfaction.py`` re-makes it and a slow test re-derives them.
@@ -26,6 +32,8 @@ import numpy as np
 
 from ..olfaction import (
     CalibrationRun,
+    hit_log_likelihood,
+    mixture_weights,
     MeanWindEstimator,
     PlumeFit,
     PlumeModel,
@@ -42,26 +50,38 @@ from ._robot_models import wind_basis
 from ._run import walk
 from ._tour import exploration_tour
 
-__all__ = ["CALIBRATION_RUNS", "Calibration", "calibrate", "calibrate_encounter_scale", "calibration_runs",
-           "pmfs_tempering"]
+__all__ = ["CALIBRATION_RUNS", "Calibration", "GRID_AXES", "GRID_CALIBRATION_RUNS", "calibrate",
+           "calibrate_encounter_scale", "calibration_runs", "parameter_grid_weights", "pmfs_tempering"]
 
 #: (seed, source) of the calibration runs: seeds and sources disjoint from the evaluation's (oven, bed, the floor
 #: point 5.0,6.0; seeds 0–999); two floor points in the bedrooms, where the dead-end rooms are.
 CALIBRATION_RUNS = ((1000, "toilet"), (1001, "couch"), (1002, "tv"), (1003, "refrigerator"), (1004, "sink"),
                     (1005, "dining table"), (1006, "2.0,10.0"), (1007, "8.5,8.5"))
 
+#: (seed, source) of the runs whose plume parameters give the grid's population weights: CALIBRATION_RUNS, its
+#: sources again on seeds 1008–1015, and floor points in the hallway (away from the evaluated 5.0,6.0).
+GRID_CALIBRATION_RUNS = CALIBRATION_RUNS + tuple((seed + 8, src) for seed, src in CALIBRATION_RUNS) + (
+    (1016, "2.5,6.0"), (1017, "7.5,6.0"), (1018, "2.5,6.0"), (1019, "7.5,6.0"))
+
+#: The plume-parameter grid of :func:`parameter_grid_weights`: D (m²/s) a factor ≈ 3 either side of the
+#: maximum-likelihood 0.0131, τ at its 284 s (the likelihood is flat in τ by comparison), κ (m²/s) halved and
+#: doubled around 0.821 (κ costs no plume solve).
+GRID_AXES = {"diffusivity": (0.004, 0.0131, 0.04), "lifetime": (284.0,), "encounter_scale": (0.4105, 0.821, 1.642)}
+
 
 @dataclass(frozen=True)
 class Calibration:
     """The fitted hit model: ``plume`` (D, τ, κ, log-likelihood), the residuals' pooled lag-1 autocorrelation
-    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the PMFS score exponent ``pmfs_tempering``, and
-    the number of readings ``n``."""
+    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the PMFS score exponent ``pmfs_tempering``, the
+    number of readings ``n``, and ``parameter_grid``, the rows (D, τ, κ, weight) of the grid Infotaxis
+    marginalises over (None when not fitted)."""
 
     plume: PlumeFit
     rho: float
     tempering: float
     pmfs_tempering: float
     n: int
+    parameter_grid: tuple | None = None
 
 
 def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> list:
@@ -87,8 +107,9 @@ def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None =
     return out
 
 
-def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, **fit_options) -> Calibration:
-    """Fit (D, τ, κ) and the tempering on calibration runs (module docstring).
+def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, grid_runs=GRID_CALIBRATION_RUNS,
+              **fit_options) -> Calibration:
+    """Fit (D, τ, κ), the tempering and the grid's weights on calibration runs (module docstring).
 
     Parameters
     ----------
@@ -96,6 +117,8 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
         (seed, source) pairs (default :data:`CALIBRATION_RUNS`).
     config : ExperimentConfig, optional, keyword-only
         ε, warm-up and robot timing; its plume parameters and tempering are ignored.
+    grid_runs : sequence of (int, str or (2,) array_like), or None, keyword-only
+        The runs of :func:`parameter_grid_weights` (default :data:`GRID_CALIBRATION_RUNS`); ``None`` skips it.
     **fit_options
         Passed to :func:`psgsl_pgm.olfaction.fit_plume_parameters` (grids, ``refine``).
 
@@ -107,7 +130,59 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     data = calibration_runs(runs, config=config)
     fit = fit_plume_parameters(data, false_hit_rate=config.false_hit_rate, **fit_options)
     rho, beta = ar1_tempering(hit_residuals(data, fit, false_hit_rate=config.false_hit_rate))
-    return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)))
+    grid = None
+    if grid_runs is not None:
+        known = dict(zip(((int(s), str(src)) for s, src in runs), data))
+        grid_data = [known.get((int(s), str(src))) for s, src in grid_runs]
+        todo = [(s, src) for (s, src), d in zip(grid_runs, grid_data) if d is None]
+        more = iter(calibration_runs(todo, config=config) if todo else [])
+        grid_data = [d if d is not None else next(more) for d in grid_data]
+        grid = parameter_grid_weights(grid_data, tempering=beta, false_hit_rate=config.false_hit_rate)
+    return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)), grid)
+
+
+def parameter_grid_weights(data, *, tempering: float, false_hit_rate: float, axes=None, drop: float = 1e-3) -> tuple:
+    """The rows (D, τ, κ, π) of the plume-parameter grid of :class:`psgsl_pgm.olfaction.GridInfotaxis`.
+
+    For every run r and grid point θ_j, ℓ_rj = Σ_n log P_θj(g_n | s_r) at the run's known source (its plume
+    with its own estimated wind); π maximises Σ_r log Σ_j π_j exp(β ℓ_rj)
+    (:func:`psgsl_pgm.olfaction.mixture_weights`, β the tempering the estimator uses). Grid points below
+    ``drop`` are left out (each distinct (D, τ) costs the estimator a plume solve per reading) and the rest
+    renormalised.
+
+    Parameters
+    ----------
+    data : sequence of CalibrationRun
+    tempering : float, keyword-only
+        β.
+    false_hit_rate : float, keyword-only
+        ε.
+    axes : dict, optional, keyword-only
+        ``{"diffusivity", "lifetime", "encounter_scale"}`` value tuples (default :data:`GRID_AXES`).
+    drop : float, keyword-only
+        Weights below it are dropped.
+
+    Returns
+    -------
+    tuple of (D, τ, κ, weight)
+    """
+    axes = GRID_AXES if axes is None else axes
+    data = list(data)
+    if not data:
+        raise ValueError("data must hold at least one calibration run")
+    points = [(d, t, k) for d in axes["diffusivity"] for t in axes["lifetime"] for k in axes["encounter_scale"]]
+    ell = np.empty((len(data), len(points)))
+    for i, run in enumerate(data):
+        for d in axes["diffusivity"]:
+            for t in axes["lifetime"]:
+                c = run.predicted(d, t)  # G(x_n | s_r): one factorisation and one forward solve
+                for j, (dj, tj, kj) in enumerate(points):
+                    if (dj, tj) == (d, t):
+                        ell[i, j] = hit_log_likelihood(c, run.hits, kj, false_hit_rate)
+    w = mixture_weights(ell, tempering=tempering)
+    keep = w >= drop
+    w = w[keep] / w[keep].sum()
+    return tuple((float(d), float(t), float(k), float(v)) for (d, t, k), v in zip(np.array(points)[keep], w))
 
 
 def _fitted_model(run: CalibrationRun, diffusivity: float, lifetime: float, encounter_scale: float) -> PlumeModel:

@@ -33,6 +33,7 @@ from ._calibrate import (
     fit_plume_parameters,
     hit_log_likelihood,
     hit_residuals,
+    mixture_weights,
     profile_log_likelihood,
     score_tempering,
 )
@@ -62,6 +63,7 @@ __all__ = [
     "fit_plume_parameters",
     "hit_log_likelihood",
     "hit_residuals",
+    "mixture_weights",
     "profile_log_likelihood",
     "score_tempering",
     "vergassola_concentration",

@@ -13,7 +13,8 @@ from .._shared._validate import as_array, as_float_array, describe, positive, un
 from ._plume import PlumeModel
 
 __all__ = ["CalibrationRun", "PlumeFit", "ar1_tempering", "encounter_scale_mle", "fit_encounter_scale",
-           "fit_plume_parameters", "hit_log_likelihood", "hit_residuals", "profile_log_likelihood", "score_tempering"]
+           "fit_plume_parameters", "hit_log_likelihood", "hit_residuals", "mixture_weights", "profile_log_likelihood",
+           "score_tempering"]
 
 
 def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit_rate: float = 0.0) -> float:
@@ -248,12 +249,12 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
     Nelder–Mead on (log D, log τ) (``refine``). One sparse LU factorisation and one forward solve per run and
     (D, τ).
 
-    Why a point estimate (maximum likelihood) and not a posterior marginalised over (D, τ, κ): the estimator
-    would then have to carry one plume model per grid point (a factorisation and a Green's-function cache each)
-    and mix their predictions at every reading, multiplying its cost by the grid size; and with hundreds of
-    calibration readings the profile likelihood is sharply peaked (the log-likelihood drops by tens of nats
-    between neighbouring grid points), so the mixture would be dominated by one point anyway. What the point
-    estimate leaves out — correlated readings — is accounted for by the tempering (:func:`ar1_tempering`).
+    This is the one (D, τ, κ) that fits the pooled readings best. Pooled over hundreds of readings the profile
+    likelihood is sharply peaked, but that sharpness is about the population average, not about any one run:
+    fitted run by run, the parameters vary (D about three times smaller for a source in a corridor's fast
+    flow, κ fourfold between runs). :class:`GridInfotaxis` therefore marginalises over a grid of (D, τ, κ)
+    around this fit with population weights from :func:`mixture_weights` (``parameter_grid``); PMFS and the
+    residual tempering (:func:`ar1_tempering`) use the point estimate.
 
     Parameters
     ----------
@@ -397,3 +398,61 @@ def ar1_tempering(residuals):
         raise ValueError("residuals must hold at least one pair of consecutive readings that vary")
     rho = min(max(num / den, 0.0), 1.0 - 1e-12)
     return float(rho), float((1.0 - rho) / (1.0 + rho))
+
+
+def mixture_weights(log_likelihoods, *, tempering: float = 1.0, tol: float = 1e-12, max_iter: int = 100000):
+    """Prior weights π of a grid of plume parameters θ_j that maximise the marginal likelihood of calibration runs.
+
+    Each run r has its own θ (a run-level unknown), drawn from the population distribution π over the grid; its
+    readings around the known source have (tempered) likelihood exp(β ℓ_rj), ℓ_rj = Σ_n log P_θj(g_n | s_r).
+    π maximises Σ_r log Σ_j π_j exp(β ℓ_rj) (the nonparametric maximum-likelihood mixing distribution on the
+    grid; empirical Bayes), found by EM: π_j ← mean_r p(θ_j | run r), p(θ_j | r) ∝ π_j exp(β ℓ_rj). The
+    objective is concave in π and every EM step increases it; at the maximum
+    mean_r exp(β ℓ_rj) / Σ_i π_i exp(β ℓ_ri) ≤ 1 for every j, with equality where π_j > 0.
+    These are the weights of :class:`GridInfotaxis`' ``parameter_grid``, whose posterior then carries the
+    run's θ as an unknown updated with the readings.
+
+    Parameters
+    ----------
+    log_likelihoods : (R, J) array_like of float
+        ℓ_rj, untempered (−inf allowed where a component cannot explain a run, not for every component).
+    tempering : float, keyword-only
+        β ∈ (0, 1], as in the estimator.
+    tol : float, keyword-only
+        Stop when no weight moves by more than ``tol``.
+    max_iter : int, keyword-only
+
+    Returns
+    -------
+    weights : (J,) ndarray of float64
+        Sums to 1.
+
+    Examples
+    --------
+    >>> w = mixture_weights([[0.0, -50.0], [-50.0, 0.0], [0.0, -50.0]])   # two runs prefer θ_0, one θ_1
+    >>> [round(float(v), 6) for v in w]
+    [0.666667, 0.333333]
+    """
+    from scipy.special import logsumexp
+
+    ell = as_float_array(log_likelihoods, "log_likelihoods", dtype=np.float64, ndim=2)
+    if ell.shape[0] < 1 or ell.shape[1] < 1:
+        raise ValueError(f"log_likelihoods must be (R, J) with R, J >= 1, got {describe(ell)}")
+    if np.isnan(ell).any() or (ell == np.inf).any():
+        raise ValueError("log_likelihoods must be finite or -inf (no NaN, no +inf)")
+    if not np.isfinite(ell).any(axis=1).all():
+        raise ValueError("log_likelihoods: every run needs at least one component with a finite log-likelihood")
+    beta = unit_interval(tempering, "tempering", low_open=True, high_open=False)
+    a = beta * ell
+    a = a - a.max(axis=1, keepdims=True)  # per-run shift: p(θ | r) is unchanged
+    lik = np.exp(a)  # (R, J), max 1 per row
+    w = np.full(ell.shape[1], 1.0 / ell.shape[1])
+    for _ in range(int(max_iter)):
+        resp = lik * w
+        resp /= resp.sum(axis=1, keepdims=True)  # p(θ_j | run r)
+        new = resp.mean(axis=0)
+        done = np.abs(new - w).max() <= tol
+        w = new
+        if done:
+            break
+    return w / w.sum()

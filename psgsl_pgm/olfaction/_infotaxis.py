@@ -3,12 +3,28 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import logsumexp
 
-from .._shared._validate import unit_interval
+from .._shared._validate import as_float_array, describe, unit_interval
 from ._base import Observation, OlfactoryEstimator
 from ._plume import PlumeModel
 
 __all__ = ["GridInfotaxis"]
+
+
+def _parameter_grid(grid) -> np.ndarray:
+    """``parameter_grid`` as a read-only (J, 4) float64 array of rows (D, τ, κ, weight), weights normalised."""
+    g = as_float_array(grid, "parameter_grid", dtype=np.float64)
+    if g.ndim != 2 or g.shape[1] != 4 or g.shape[0] < 1:
+        raise ValueError(f"parameter_grid must be (J, 4) rows (diffusivity, lifetime, encounter_scale, weight) with "
+                         f"J >= 1, got {describe(g)}")
+    g = g.astype(np.float64)
+    if not np.isfinite(g).all() or (g[:, :3] <= 0).any() or (g[:, 3] < 0).any() or not g[:, 3].sum() > 0:
+        raise ValueError("parameter_grid must hold positive finite (diffusivity, lifetime, encounter_scale) and "
+                         "non-negative weights with a positive sum")
+    g[:, 3] /= g[:, 3].sum()
+    g.flags.writeable = False
+    return g
 
 
 class GridInfotaxis(OlfactoryEstimator):
@@ -46,6 +62,25 @@ class GridInfotaxis(OlfactoryEstimator):
     β, removes the strongest correlation, so β need not be tiny. The estimator is deterministic (no random
     numbers); synthetic readings come from :meth:`PlumeModel.sample_hits` with an explicit seed.
 
+    **Plume parameters marginalised (``parameter_grid``).** One (D, τ, κ) for every run and every place is a
+    point estimate of something that varies: fitted run by run on calibration tours, the maximum-likelihood
+    diffusivity of a source in the fast flow of a corridor is a third of that of a source in a room (the plume
+    there stays narrow), and κ̂ varies fourfold between runs. A point estimate that is wrong for *this* run
+    makes every reading a little more surprising under the true source than under a cell beside it, and the
+    posterior settles, confidently, beside the source. With a grid θ_j = (D_j, τ_j, κ_j) and prior weights π_j
+    (the population distribution of θ over calibration runs, :func:`mixture_weights`) the posterior is the
+    Bayesian model average with θ a run-level unknown,
+
+        p(s | g_1..n) ∝ p(s) Σ_j π_j Π_k P_θj(g_k | s)^β,
+
+    i.e. the posterior over θ is updated online, jointly with s (p(θ_j | s, g) ∝ π_j Π_k P_θj(g_k | s)^β), and
+    the readings decide which plume this run has. It is exact (a log-sum-exp over j of the accumulated
+    per-component log-likelihoods); it costs one plume factorisation and one adjoint solve per reading per
+    distinct (D, τ) of the grid (κ is free: it only scales G). Without a grid the model's own (D, τ, κ) is the
+    single component, and the update is the one above. For planning, :meth:`hit_probability` and
+    :meth:`information_gain` use the prior predictive Σ_j π_j P_θj(hit | s) — fixed for a plume model, so the
+    closed loop's per-cell cache of hit rows stays valid — not the run's posterior over θ.
+
     Parameters
     ----------
     occupancy : (H, W) ndarray of bool
@@ -65,6 +100,11 @@ class GridInfotaxis(OlfactoryEstimator):
     false_hit_rate : float, default 0.01
         ε ∈ [0, 1): probability of a hit whatever the source. With ε = 0 a hit that no candidate can explain
         raises ValueError.
+    parameter_grid : (J, 4) array_like of float, optional
+        Rows (D m²/s, τ s, κ m²/s, prior weight π_j ≥ 0) of the plume parameters to marginalise over (see
+        above; weights are normalised). ``None``: the single component (D, τ, κ) of the plume model. The
+        model passed in gives the map, the wind and the outlets; a row with its (D, τ) shares its Green's
+        functions.
     **plume : keyword arguments
         ``diffusivity``, ``lifetime``, ``encounter_scale``, ``boundary``, ``scheme``, ``cache_size`` of
         :class:`PlumeModel`.
@@ -101,19 +141,21 @@ class GridInfotaxis(OlfactoryEstimator):
         prior=None,
         tempering: float = 0.5,
         false_hit_rate: float = 0.01,
+        parameter_grid=None,
         **plume,
     ):
         model = PlumeModel(occupancy, resolution=resolution, origin=origin, wind=wind, outlets=outlets, **plume)
-        self._configure(tempering, false_hit_rate)
+        self._configure(tempering, false_hit_rate, parameter_grid)
         super().__init__(model, prior=prior)
 
     @classmethod
     def from_model(
-        cls, model: PlumeModel, *, prior=None, tempering: float = 0.5, false_hit_rate: float = 0.01
+        cls, model: PlumeModel, *, prior=None, tempering: float = 0.5, false_hit_rate: float = 0.01,
+        parameter_grid=None,
     ) -> "GridInfotaxis":
         """Estimator on an existing :class:`PlumeModel` (shares its factorisation and Green's-function cache)."""
         self = cls.__new__(cls)
-        self._configure(tempering, false_hit_rate)
+        self._configure(tempering, false_hit_rate, parameter_grid)
         OlfactoryEstimator.__init__(self, model, prior=prior)
         return self
 
@@ -123,13 +165,76 @@ class GridInfotaxis(OlfactoryEstimator):
 
         ``wind`` is the (H, W, 2) wind field in m/s; remaining keywords as in the constructor.
         """
-        opts = {k: kwargs.pop(k) for k in ("tempering", "false_hit_rate") if k in kwargs}
+        opts = {k: kwargs.pop(k) for k in ("tempering", "false_hit_rate", "parameter_grid") if k in kwargs}
         model = PlumeModel.from_grid_map(grid_map, wind, outlets=outlets, **kwargs)
         return cls.from_model(model, prior=prior, **opts)
 
-    def _configure(self, tempering, false_hit_rate) -> None:
+    def _configure(self, tempering, false_hit_rate, parameter_grid=None) -> None:
         self.tempering = unit_interval(tempering, "tempering", low_open=True, high_open=False)
         self.false_hit_rate = unit_interval(false_hit_rate, "false_hit_rate", low_open=False, high_open=True)
+        self.parameter_grid = None if parameter_grid is None else _parameter_grid(parameter_grid)
+        self._components_of = None  # the plume model the components were built on
+
+    def _build_components(self) -> None:
+        """One plume model per distinct (D, τ) of the grid on the current model's map and wind (the model itself
+        where they coincide), and per component j its model, κ_j and log π_j."""
+        base = self.model
+        if self.parameter_grid is None:
+            models, index = [base], [0]
+            kappa, log_w = np.array([base.encounter_scale]), np.zeros(1)
+        else:
+            g = self.parameter_grid
+            models, index, where = [], [], {}
+            for d, tau in g[:, :2]:
+                key = (float(d), float(tau))
+                if key not in where:
+                    where[key] = len(models)
+                    models.append(base if key == (base.diffusivity, base.lifetime) else PlumeModel(
+                        base.geometry.occupancy, resolution=base.geometry.resolution, origin=base.geometry.origin,
+                        wind=base.wind, outlets=base.outlets, diffusivity=key[0], lifetime=key[1],
+                        encounter_scale=base.encounter_scale, boundary=base.boundary, scheme=base.scheme,
+                        cache_size=base.cache_size))
+                index.append(where[key])
+            kappa = g[:, 2].copy()
+            with np.errstate(divide="ignore"):  # a zero weight: log 0 = −inf, that component never counts
+                log_w = np.log(g[:, 3])
+        self._models = models
+        self._component_model = np.array(index, dtype=np.int64)
+        self._kappa = kappa
+        self._log_weights = log_w
+        self._components_of = base
+
+    def _component_rows(self, flat_cells) -> np.ndarray:
+        """(J, K, H·W) κ_j G_j(x_k | s) of every component j for sensor cells x_k."""
+        rows = np.stack([m.green_rows(flat_cells) for m in self._models])  # (M, K, H·W)
+        return self._kappa[:, None, None] * rows[self._component_model]
+
+    def _mix(self, loglik: np.ndarray) -> np.ndarray:
+        """log Σ_j π_j exp(L_j(s)) of per-component log-likelihoods (J, H·W); L_0 itself for one component."""
+        if loglik.shape[0] == 1:
+            return loglik[0]
+        with np.errstate(divide="ignore"):
+            return logsumexp(self._log_weights[:, None] + loglik, axis=0)
+
+    @property
+    def n_components(self) -> int:
+        """J, the number of (D, τ, κ) components marginalised over (1 without a ``parameter_grid``)."""
+        return 1 if self.parameter_grid is None else self.parameter_grid.shape[0]
+
+    @property
+    def plume_models(self) -> tuple:
+        """The plume models of the distinct (D, τ) of the grid (the estimator's model first if it is one)."""
+        return tuple(self._models)
+
+    def parameter_posterior(self) -> np.ndarray:
+        """(J,) p(θ_j | g) = Σ_s p(s | g) p(θ_j | s, g), the posterior over the grid's components (sums to 1)."""
+        if self.n_components == 1:
+            return np.ones(1)
+        a = self._log_weights[:, None] + self._loglik
+        with np.errstate(divide="ignore", invalid="ignore"):
+            resp = np.exp(a - logsumexp(a, axis=0))  # p(θ_j | s, g)
+        resp = np.where(np.isfinite(resp), resp, 0.0)
+        return resp @ self._post
 
     # --- likelihood -----------------------------------------------------------------------------------------
     def log_likelihood(self, position, hit) -> np.ndarray:
@@ -145,14 +250,24 @@ class GridInfotaxis(OlfactoryEstimator):
         Returns
         -------
         loglik : (H, W) ndarray of float64
-            May be −inf (hit with ε = 0 where G = 0); never NaN.
+            May be −inf (hit with ε = 0 where G = 0); never NaN. With a ``parameter_grid``, the predictive
+            log Σ_j p(θ_j | s, g) P_θj(g | s) given the readings so far.
         """
         r, c = self.model.cell_of(position)
         flat = r * self.geometry.shape[1] + c
-        return self._log_likelihood_flat(flat, bool(hit)).reshape(self.geometry.shape)
+        ell = self._log_likelihood_flat(flat, bool(hit))
+        if ell.shape[0] > 1:  # weights p(θ_j | s, g) ∝ π_j exp(L_j(s))
+            a = self._log_weights[:, None] + self._loglik
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ell = logsumexp(a + ell, axis=0) - logsumexp(a, axis=0)
+            ell = np.where(np.isnan(ell), -np.inf, ell)  # a cell no component allows
+        else:
+            ell = ell[0]
+        return ell.reshape(self.geometry.shape)
 
     def _log_likelihood_flat(self, flat_cell: int, hit: bool) -> np.ndarray:
-        mu = self.model.encounter_scale * self.model.green_rows([flat_cell])[0]  # expected encounters κ G(x|s)
+        """(J, H·W) log P_θj(g | s) of one reading at ``flat_cell`` for every component j and source s."""
+        mu = self._component_rows([flat_cell])[:, 0]  # expected encounters κ_j G_j(x|s)
         eps = self.false_hit_rate
         if hit:
             with np.errstate(divide="ignore"):  # ε = 0 and G = 0 -> log 0 = −inf, intended
@@ -160,23 +275,29 @@ class GridInfotaxis(OlfactoryEstimator):
         return np.log1p(-eps) - mu  # log[(1−ε) e^{−κG}]
 
     def _hit_likelihood_rows(self, flat_cells: np.ndarray) -> np.ndarray:
-        p = -np.expm1(-self.model.encounter_scale * self.model.green_rows(flat_cells))
-        return self.false_hit_rate + (1.0 - self.false_hit_rate) * p  # P(hit | s) with false hits
+        p = -np.expm1(-self._component_rows(flat_cells))  # (J, K, H·W)
+        p = self.false_hit_rate + (1.0 - self.false_hit_rate) * p  # P_θj(hit | s) with false hits
+        if p.shape[0] == 1:
+            return p[0]
+        return np.tensordot(np.exp(self._log_weights), p, axes=1)  # prior predictive Σ_j π_j P_θj(hit | s)
 
     # --- state ----------------------------------------------------------------------------------------------
     def _reset_state(self) -> None:
-        self._loglik = np.zeros(self.geometry.shape[0] * self.geometry.shape[1])
+        if self._components_of is not self.model:  # first use, or a re-solved model (replace_model)
+            self._build_components()
+        self._loglik = np.zeros((len(self._kappa), self.geometry.shape[0] * self.geometry.shape[1]))
 
     def _propose(self, obs: Observation):
         r, c = obs.cell
         ell = self._log_likelihood_flat(r * self.geometry.shape[1] + c, obs.hit)
-        loglik = self._loglik + self.tempering * ell  # β Σ_k log P(g_k | s)
-        return self._log_prior + loglik, loglik
+        loglik = self._loglik + self.tempering * ell  # β Σ_k log P_θj(g_k | s), per component
+        return self._log_prior + self._mix(loglik), loglik
 
     def _accept(self, obs: Observation, payload) -> None:
         self._loglik = payload
 
     @property
     def log_likelihood_total(self) -> np.ndarray:
-        """(H, W) accumulated tempered log-likelihood β Σ_k log P(g_k | s)."""
-        return self._loglik.reshape(self.geometry.shape).copy()
+        """(H, W) accumulated tempered log-likelihood β Σ_k log P(g_k | s); with a ``parameter_grid`` the
+        marginal log Σ_j π_j Π_k P_θj(g_k | s)^β."""
+        return self._mix(self._loglik).reshape(self.geometry.shape).copy()

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from psgsl_pgm.experiment import ExperimentConfig, VariantPosteriors
+from psgsl_pgm.experiment._config import PARAMETER_GRID
 from psgsl_pgm.experiment._robot_models import robot_detector_model, wind_basis
 from psgsl_pgm.experiment._run import walk
 from psgsl_pgm.experiment._tour import exploration_tour
@@ -135,3 +136,33 @@ def test_both_estimators_get_the_calibrated_inputs():
         assert (b.model.diffusivity, b.model.lifetime, b.model.encounter_scale) == (
             cfg.diffusivity, cfg.lifetime, cfg.encounter_scale)
         assert not b.model.wind.any()  # still air until the first anemometer reading
+
+
+def test_infotaxis_gets_the_parameter_grid_and_the_plume_solves_follow_the_wind():
+    """The grid Infotaxis estimator marginalises over config.parameter_grid (its weights normalised); PMFS keeps
+    the single (D, τ, κ); a re-solved wind re-solves every component's plume (all carry the estimated wind)."""
+    from psgsl_pgm.experiment._step import make_estimator
+    from psgsl_pgm.olfaction import PlumeModel
+
+    grid = ((0.02, 100.0, 0.5, 1.0), (0.0131, 284.0, 0.821, 3.0))
+    cfg = ExperimentConfig(parameter_grid=grid, stops=6)
+    model = PlumeModel(np.zeros((6, 8), bool), resolution=0.25, diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
+                       encounter_scale=cfg.encounter_scale)
+    est = make_estimator("infotaxis", model, cfg)
+    np.testing.assert_array_equal(est.parameter_grid, [[0.02, 100.0, 0.5, 0.25], [0.0131, 284.0, 0.821, 0.75]])
+    assert est.n_components == 2 and est.plume_models[1] is model  # the config's own (D, τ) shares the model
+    assert not hasattr(make_estimator("pmfs", model, cfg), "parameter_grid")
+    assert ExperimentConfig(parameter_grid=None).parameter_grid is None
+    assert ExperimentConfig().parameter_grid is None and "parameter_grid" not in ExperimentConfig().to_dict()
+    with_grid = ExperimentConfig(parameter_grid=PARAMETER_GRID)
+    assert with_grid.to_dict()["parameter_grid"] == [list(r) for r in PARAMETER_GRID]
+    world = make_world(seed=6, source="oven", warm_up=5.0)
+    b = VariantPosteriors(world, "infotaxis", cfg)
+    stop = exploration_tour(world.house).stops[0]
+    b.observe(stop, world.sense_gas(stop), world.sense_wind(stop), [])
+    assert b.n_wind_solves == 2 and b.estimator.model is b.model
+    assert all(np.array_equal(m.wind, b.model.wind) and m.wind.any() for m in b.estimator.plume_models)
+    with pytest.raises(ValueError, match="parameter_grid must be"):
+        ExperimentConfig(parameter_grid=((0.01, 100.0, 0.5),))
+    with pytest.raises(ValueError, match="non-negative weights"):
+        ExperimentConfig(parameter_grid=((0.01, 100.0, 0.5, -1.0),))

@@ -7,7 +7,7 @@ import pytest
 
 from psgsl_pgm import fuse, semantic_source_probability
 from psgsl_pgm.experiment import ExperimentConfig, Tour, VARIANTS, error_and_spread, exploration_tour, run_search
-from psgsl_pgm.experiment._calibration import CALIBRATION_RUNS
+from psgsl_pgm.experiment._calibration import CALIBRATION_RUNS, GRID_CALIBRATION_RUNS
 from psgsl_pgm.experiment._driver import DEMO_SEEDS
 from psgsl_pgm.sim import make_world
 
@@ -90,7 +90,7 @@ def test_run_equals_an_independent_pipeline_built_from_the_public_parts(short_ru
         return GridInfotaxis.from_grid_map(world.house.grid, a * basis, outlets=world.house.outlet,
                                            diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
                                            encounter_scale=cfg.encounter_scale, tempering=cfg.tempering,
-                                           false_hit_rate=cfg.false_hit_rate)
+                                           false_hit_rate=cfg.false_hit_rate, parameter_grid=cfg.parameter_grid)
 
     est, solved, num, den, seen = estimator(0.0), 0.0, 0.0, 0.0, []
     for j, stop, reading, wind, frames in walk(world, tour, cfg):
@@ -151,6 +151,10 @@ def test_calibration_runs_are_disjoint_from_evaluation_and_reference():
     seeds = {s for s, _ in CALIBRATION_RUNS}
     assert not seeds & set(range(100)) and not seeds & set(range(10_000, 10_010))
     assert not {src for _, src in CALIBRATION_RUNS} & {"oven", "bed", "5.0,6.0"}
+    grid_seeds = {s for s, _ in GRID_CALIBRATION_RUNS}
+    assert set(CALIBRATION_RUNS) <= set(GRID_CALIBRATION_RUNS) and len(grid_seeds) == len(GRID_CALIBRATION_RUNS)
+    assert not grid_seeds & set(range(1000)) and not grid_seeds & set(range(10_000, 10_010))
+    assert not {src for _, src in GRID_CALIBRATION_RUNS} & {"oven", "bed", "5.0,6.0"}
     assert set(DEMO_SEEDS) <= set(range(100))
 
 
@@ -159,6 +163,7 @@ def test_stored_plume_parameters_and_tempering_are_the_calibrated_ones():
     """D, τ, κ and β in ExperimentConfig are calibrate()'s maximum-likelihood fit on CALIBRATION_RUNS (D = 0.01312,
     τ = 284.0, κ = 0.8213, β = 0.2976, PMFS λ = 0.3801) to their three stored digits."""
     from psgsl_pgm.experiment import calibrate
+    from psgsl_pgm.experiment._config import PARAMETER_GRID
 
     cal = calibrate()
     cfg = ExperimentConfig()
@@ -167,6 +172,10 @@ def test_stored_plume_parameters_and_tempering_are_the_calibrated_ones():
     assert cfg.encounter_scale == pytest.approx(cal.plume.encounter_scale, rel=5e-3)
     assert cfg.tempering == pytest.approx(cal.tempering, rel=5e-3)
     assert cfg.pmfs_tempering == pytest.approx(cal.pmfs_tempering, rel=5e-3)
+    stored, fitted = np.array(PARAMETER_GRID), np.array(cal.parameter_grid)
+    assert stored.shape == fitted.shape
+    np.testing.assert_array_equal(stored[:, :3], fitted[:, :3])  # the grid points kept
+    np.testing.assert_allclose(stored[:, 3], fitted[:, 3], atol=5e-4)  # their weights, to three digits
 
 
 @pytest.mark.slow
