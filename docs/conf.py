@@ -56,7 +56,7 @@ nitpicky = True
 # left unlinked instead of failing the build. Everything of psgsl_pgm itself must resolve.
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|scipy|dask|da|matplotlib|mpl|plt|pgmpy|networkx|nx|pathlib|os|collections|typing|abc|"
-               r"concurrent|multiprocessing|distributed|zarr|PIL|tqdm|lifelines)(\..*)?"),
+               r"concurrent|multiprocessing|distributed|zarr|PIL|tqdm|lifelines|types|rosbags|mcap|foxglove)(\..*)?"),
     (r"py:class", r"(array[_-]like|ndarray|optional|callable|iterable|sequence|mapping|path-like|file-like|"
                   r"int|float|bool|str|bytes|dict|list|tuple|set|None|object|type|slice|complex|"
                   r"Path|Axes|Figure|Generator|Iterable|Iterator|Sequence|Mapping|Callable|Any)"),
@@ -105,7 +105,7 @@ sphinx_gallery_conf = {
 #: The public packages, in the order the reference lists them (docs/architecture.md: every public name is
 #: imported from one of these). Their pages are written from ``__all__`` at every build, so no name is missed.
 PUBLIC_PACKAGES = ("psgsl_pgm", "psgsl_pgm.networks", "psgsl_pgm.olfaction", "psgsl_pgm.sim",
-                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.teaching")
+                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching")
 API = DOCS / "reference" / "api"
 
 

@@ -273,7 +273,7 @@ class FreeSpace:
         return out
 
     def view_bound(self, gain_flat: np.ndarray, cells) -> np.ndarray:
-        """(K,) an upper bound of |φ_O| at every heading of each candidate cell: Σ |gain| over the tiles of
+        """(K,) an upper bound of abs(φ_O) at every heading of each candidate cell: Σ abs(gain) over the tiles of
         :data:`_TILE` × :data:`_TILE` cells that its view touches, times 1 + 1e-9 (far above the relative
         rounding of either sum, ≤ 1e-12 for views of fewer than a million cells). Not finite when the gains are
         not."""

@@ -302,7 +302,7 @@ def nested_indices(groups, rng) -> np.ndarray:
 
 def nested_bootstrap(values, groups, statistic=None, *, level: float = 0.95, n_resamples: int = 4000,
                      seed: int = 0) -> dict:
-    """Percentile interval of a statistic of runs nested in groups (:func:`nested_indices`).
+    """Percentile interval of a statistic of runs nested in groups (``nested_indices``).
 
     Parameters
     ----------

@@ -34,7 +34,7 @@ from ._devtools import Browser, find_chromium
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted(p.stem for p in (ROOT / "notebooks").glob("*.ipynb"))
 PUBLIC_PACKAGES = ("psgsl_pgm", "psgsl_pgm.networks", "psgsl_pgm.olfaction", "psgsl_pgm.sim",
-                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.teaching")
+                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching")
 DOCS_EXTENSIONS = ("sphinx", "pydata_sphinx_theme", "numpydoc", "myst_nb", "sphinx_gallery")
 
 #: Every image of the page, eagerly loaded and decoded: [(src, decoded, inside a notebook cell's output), ...].
