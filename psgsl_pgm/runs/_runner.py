@@ -654,7 +654,13 @@ def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable |
     finally:
         bar.close()
         if backend is not None:
-            backend.close()
+            try:
+                with interrupts:  # waiting for the workers to finish: a second Ctrl-C still abandons them at once
+                    backend.close()
+            except _Abort:
+                with _sigint_ignored():
+                    backend.abort()
+                raise GridInterrupted(len(done_before) + computed, total, immediate=True) from None
     if error is not None:
         raise error
     return GridReport(total, len(done_before), computed)

@@ -52,7 +52,7 @@ def closed_loop_in_world(source, seed, policy, variant, estimator, *, world=None
         meta = {"world": world, "source": spec if isinstance(spec, str) else list(spec), "seed": int(seed),
                 "estimator": estimator, "policy": policy, "variant": variant,
                 "config": dict(run.config["experiment"])}
-        recorder.write(record, variants=VARIANTS, meta=meta)
+        recorder.write(record, variants=(variant,), meta=meta)
     return run
 
 

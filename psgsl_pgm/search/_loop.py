@@ -316,7 +316,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         rec["region_hit"].append(bool(region.ravel()[truth_cell]))
         rec["hpd_level"].append(hpd_level(post, truth_cell))
         if recorder is not None:
-            recorder.step(beliefs.posteriors(VARIANTS), beliefs)
+            recorder.step(beliefs.posteriors((variant,)), beliefs)
         return post
 
     start = space.position(start_cell)
