@@ -282,6 +282,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     budget = search.time_budget
     detection = DetectionModel.from_house(house, r, miss_probability=search.miss_probability)
     truth_hypothesis = detection.source_cell(truth, world.source_object, house)
+    space.cover(detection)  # stops that can find every findable source (FreeSpace.cover)
     misses = np.random.default_rng([int(seed), 0x5EA2C4]) if search.miss_probability > 0 else None
 
     def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis

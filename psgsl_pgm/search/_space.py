@@ -54,7 +54,7 @@ class FreeSpace:
         between ``nav`` cells, no corner cutting), weights in metres.
     headings : (n_headings,) ndarray
     lattice : (H, W) bool
-        Navigable lattice cells (candidate positions).
+        Navigable lattice cells (candidate positions), with the finder cells of :meth:`cover` once it is called.
     tile : (H·W,) ndarray of int
         The tile of each cell for the policies' bounds: the free cells of a block of 5 × 5 cells form a tile
         (numbered 0 … ``n_tiles`` − 1), every other cell is in tile ``n_tiles``.
@@ -73,7 +73,10 @@ class FreeSpace:
         step = max(1, int(round(spacing / self.resolution)))
         lat = np.zeros(self.nav.shape, bool)
         lat[step // 2 :: step, step // 2 :: step] = True
-        self.lattice = lat & self.nav
+        self.lattice = self._base_lattice = lat & self.nav
+        self._lattice_spacing = step * self.resolution
+        self._finders: dict = {}  # found radius -> (K,) finder cells of cover()
+        self._covered_for = None
         self.headings = 2 * np.pi * np.arange(int(n_headings)) / int(n_headings)
         self.centres = grid.cell_centres().reshape(-1, 2)
         self.free = grid.free.ravel()
@@ -170,6 +173,94 @@ class FreeSpace:
             hit.flags.writeable = False
             self._discs[key] = hit
         return hit
+
+    def cover(self, detection) -> np.ndarray:
+        """Make the near candidates able to find every source the robot can find at all.
+
+        The lattice alone is not enough: a drivable cell within r of an object's footprint (or of a floor cell)
+        need not lie on the lattice — near furniture and walls the lattice's nearest drivable cells can be farther
+        than r from it — and a planner whose stops never come within r of the source finds it only by chance on
+        the way. So, for every hypothesis c (a free cell, or a cell of an object's footprint) that some drivable
+        cell finds under ``detection``'s rule (:class:`psgsl_pgm.search.DetectionModel`) and no lattice cell
+        does, the lattice gains one *finder cell*: the drivable cell nearest to c's found region R(c) among those
+        that find c (ties: the lowest flat index), taken greedily in flat order of the hypotheses still uncovered
+        (each finder covers every hypothesis it finds, so an object's whole footprint needs one). Afterwards every
+        hypothesis found from a drivable cell is found from a lattice cell (tested).
+
+        Finder cells fill the gaps that walls and furniture cut into the lattice. On open floor the lattice finds
+        every point source iff r is at least half its diagonal, spacing / √2; with a smaller r the lattice itself
+        is too coarse for point sources (a finer ``spacing`` is the remedy, not a finder cell at every drivable
+        cell), and only object footprints — every cell of one found together — get finder cells.
+
+        The far lattice is not changed: it only steers the robot into the horizon, where the finder cells are
+        candidates. The finder cells depend on the geometry and r only; they are computed once per found radius,
+        and calling ``cover`` with another radius replaces them (the lattice is the base lattice plus the finder
+        cells of the last radius, so a shared space gives every run of that radius the same candidates).
+
+        Parameters
+        ----------
+        detection : psgsl_pgm.search.DetectionModel
+            The loop's detection model on this house's grid.
+
+        Returns
+        -------
+        (K,) ndarray of int
+            The finder cells (flat indices), read-only.
+        """
+        r = float(detection.found_radius)
+        if detection.shape != self.nav.shape:
+            raise ValueError(f"detection must be on this space's grid of shape {self.nav.shape}, got shape "
+                             f"{detection.shape}")
+        finders = self._finders.get(r)
+        if finders is None:
+            finders = self._finder_cells(detection)
+            finders.flags.writeable = False
+            self._finders[r] = finders
+        if self._covered_for != r:
+            lattice = self._base_lattice.copy()
+            lattice.ravel()[finders] = True
+            if not np.array_equal(lattice, self.lattice):
+                for key in [k for k in self._discs if k[0] == "candidates"]:  # cached sets of the old lattice
+                    del self._discs[key]
+                self._candidate_keys.clear()
+            self.lattice = lattice
+            self._covered_for = r
+        return finders
+
+    def _finder_cells(self, detection) -> np.ndarray:
+        """The finder cells of :meth:`cover` (loops over the finder cells only: tens per house)."""
+        lattice = np.flatnonzero(self._base_lattice.ravel())
+        covered = detection.rows(self.centres[lattice]).getnnz(axis=0) > 0
+        hypotheses = detection.owner >= 0
+        if detection.found_radius >= self._lattice_spacing * np.sqrt(0.5):  # open floor: the lattice finds it all
+            hypotheses = hypotheses | self.free
+        todo = hypotheses & ~covered
+        if not todo.any():
+            return np.empty(0, dtype=np.int64)
+        # only drivable cells within r of an uncovered hypothesis's found region can find it (the distance test
+        # here only preselects, with a margin; the rule itself is detection.rows')
+        near = todo.copy()
+        for j in np.unique(detection.owner[todo & (detection.owner >= 0)]).tolist():  # uncovered objects
+            near |= detection.footprints[j]
+        reach = ndi.distance_transform_edt(~near.reshape(self.nav.shape)) * self.resolution
+        nav = np.flatnonzero(self.nav.ravel() & (reach.ravel() <= detection.found_radius + 2 * self.resolution))
+        by_row = detection.rows(self.centres[nav])  # (n_near, H·W): what each such drivable cell finds
+        by_col = by_row.tocsc()
+        todo &= by_col.getnnz(axis=0) > 0  # findable at all
+        out = []
+        start = 0
+        while True:
+            rest = np.flatnonzero(todo[start:])
+            if rest.size == 0:
+                break
+            c = start = start + int(rest[0])
+            rows = by_col.indices[by_col.indptr[c] : by_col.indptr[c + 1]]  # drivable cells that find c, sorted
+            region = self.centres[detection.region_mask(c).ravel()]
+            d2 = ((self.centres[nav[rows]][:, None, :] - region[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
+            k = int(rows[int(np.argmin(d2))])  # first minimum: the lowest flat index among equals
+            out.append(int(nav[k]))
+            todo[by_row.indices[by_row.indptr[k] : by_row.indptr[k + 1]]] = False
+        return np.array(sorted(out), dtype=np.int64)
 
     def candidates(self, cell: int, horizon: float, far_spacing: float | None = None):
         """Candidate positions of a decision at ``cell``.
