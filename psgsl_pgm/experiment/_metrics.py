@@ -103,16 +103,12 @@ def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
     if not (np.isfinite(p).all() and (p >= 0).all() and abs(p.sum() - 1.0) < 1e-6):
         raise ValueError("posterior must be a distribution (finite, >= 0, sums to 1)")
     flat = p.ravel()
-    # the positive cells by decreasing probability (the zero cells come last and add nothing to the sums): the
-    # values sorted alone, ties being equal values, give the prefix sums of the stable order by cell
-    values = -np.sort(-flat[flat > 0])
-    csum = np.cumsum(values)
+    positive = np.flatnonzero(flat > 0)  # the zero cells come last in the order and add nothing to the sums
+    order = positive[np.argsort(-flat[positive], kind="stable")]
+    csum = np.cumsum(flat[order])
     k = int(np.searchsorted(csum, mass * csum[-1] * (1 - 1e-12))) + 1  # first prefix reaching the mass
-    # the first k cells of that order: every cell above the k-th value, then the cells equal to it by cell order
-    edge = values[k - 1]
-    region = flat > edge
-    tied = np.flatnonzero(flat == edge)
-    region[tied[: k - int(np.count_nonzero(region))]] = True
+    region = np.zeros(flat.size, bool)
+    region[order[:k]] = True
     return region.reshape(p.shape)
 
 
