@@ -232,6 +232,9 @@ def _hit_rows(sit: Situation, cells) -> list:
             row.flags.writeable = False
             sit.cache[("row", c)] = row
             sit.cache[("slot", c)] = n_used + j
+            st = table[n_used + j]  # a view: a grown table is a new array, this one keeps its (final) values
+            st.flags.writeable = False
+            sit.cache[("tiles", c)] = st
         sit.cache["tile table"] = (table, n_used + len(missing))
     return [sit.cache[("row", c)] for c in cells]
 
