@@ -21,9 +21,9 @@ Data flow: maps and frames (cells + likelihood vectors, e.g. from ``psgsl_pgm.si
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from .._shared._validate import as_float_array, check_last_axis, check_nonnegative, describe, distribution, index
+from ..kernels._logsumexp import logsumexp
 from . import _dask_arrays
 from ._beliefs import room_evidence, update_class_probs
 from ._dask_arrays import is_dask_array

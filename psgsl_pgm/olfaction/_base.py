@@ -6,9 +6,10 @@ import abc
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import entr, logsumexp
+from scipy.special import entr
 
 from .._shared._validate import as_float_array
+from ..kernels._logsumexp import logsumexp
 from ._plume import PlumeModel
 from ._wind_input import as_wind_vector
 

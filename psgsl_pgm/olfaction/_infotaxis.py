@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from .._shared._validate import as_float_array, describe, unit_interval
+from ..kernels._logsumexp import logsumexp
 from ._base import Observation, OlfactoryEstimator
 from ._plume import PlumeModel
 

@@ -219,11 +219,23 @@ def _hit_rows(sit: Situation, cells) -> list:
         stats[:, :, -1] = (0.0, 1.0, 0.0)
         low, high = stats[:, 0, :-1], stats[:, 1, :-1]
         stats[:, 2, :-1] = np.minimum(entr(low) + entr(1.0 - low), entr(high) + entr(1.0 - high))
-        for c, row, st in zip(missing, p, stats):
+        # the tile statistics of every cell solved under this model, one (slots, 3, T + 1) table (a candidate
+        # set is then one gather, not a stack of per-cell arrays)
+        table, n_used = sit.cache.get("tile table", (None, 0))
+        if table is None or n_used + len(missing) > table.shape[0]:
+            grown = np.empty((max(2 * n_used + len(missing), 64),) + stats.shape[1:])
+            if n_used:
+                grown[:n_used] = table[:n_used]
+            table = grown
+        table[n_used : n_used + len(missing)] = stats
+        for j, (c, row) in enumerate(zip(missing, p)):
             row.flags.writeable = False
-            st.flags.writeable = False
             sit.cache[("row", c)] = row
+            sit.cache[("slot", c)] = n_used + j
+            st = table[n_used + j]  # a view: a grown table is a new array, this one keeps its (final) values
+            st.flags.writeable = False
             sit.cache[("tiles", c)] = st
+        sit.cache["tile table"] = (table, n_used + len(missing))
     return [sit.cache[("row", c)] for c in cells]
 
 
@@ -253,7 +265,8 @@ def _olfactory_bound(sit: Situation, cells) -> np.ndarray:
     H_b(hi_t)) (the maximum at ½ when it lies in [L, U]), plus 1e-9, far above the rounding of either side
     (≲ 1e-12 for sums of 1e4 terms)."""
     _hit_rows(sit, cells)
-    stats = np.stack([sit.cache[("tiles", c)] for c in np.asarray(cells).tolist()])  # (K, 3, T + 1)
+    slots = [sit.cache[("slot", c)] for c in np.asarray(cells).tolist()]
+    stats = sit.cache["tile table"][0][slots]  # (K, 3, T + 1)
     low, high, h_low = np.moveaxis(stats @ sit.space.tile_sums(sit.posterior.ravel()), 1, 0)
     p = np.clip(np.minimum(np.maximum(0.5, low), high), 0.0, 1.0)
     return np.maximum(entr(p) + entr(1.0 - p) - h_low, 0.0) + 1e-9

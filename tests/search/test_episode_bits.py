@@ -138,3 +138,7 @@ def test_credible_region_equals_a_full_sort():
         ref = np.zeros(p.size, bool)
         ref[order[:k]] = True
         np.testing.assert_array_equal(credible_region(p, mass), ref)
+    # the boundary inside a run of ties: the first cells of the run in cell order, as the stable sort takes them
+    p = np.array([0.0, 0.1, 0.05, 0.1, 0.3, 0.1, 0.0, 0.1, 0.1, 0.15])
+    np.testing.assert_array_equal(credible_region(p, 0.6), [0, 1, 0, 1, 1, 0, 0, 0, 0, 1])
+    np.testing.assert_array_equal(credible_region(p, 0.8), [0, 1, 0, 1, 1, 1, 0, 1, 0, 1])
