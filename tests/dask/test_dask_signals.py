@@ -1,0 +1,69 @@
+"""SIGTERM and SIGKILL of a grid's client on dask: a LocalCluster's workers end with it; a remote cluster is left
+running nothing of the grid.
+
+The grid is :mod:`tests.runs.grid_child` with ``--scheduler`` (jobs that sleep), in a process of its own; the
+signal goes to that process alone. Its LocalCluster's worker processes are read from ``/proc`` before the signal.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+
+import pytest
+
+from tests.runs.grid_child import children, kill_survivors, start, wait_for
+from tests.runs.test_runs_signals import _gone, _results, check_terminated
+
+from .dask_parts import worker_env
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the processes from Linux /proc")
+
+
+def test_sigterm_ends_a_local_clusters_workers_and_exits_143(tmp_path):
+    out, n = tmp_path / "grid", 40
+    proc = start(out, 0.3, n, "--scheduler", "local", env=worker_env())
+    wait_for(lambda: len(_results(out)) >= 1 and len(children(proc.pid)) >= 2, 120, "written run", proc)
+    workers = children(proc.pid)  # the LocalCluster's worker processes (their nannies live in the client)
+    check_terminated(proc, out, workers, n)
+
+
+def test_a_local_clusters_workers_end_when_the_client_is_killed(tmp_path):
+    """SIGKILL: dask's own check (each worker process watches a pipe from its parent) ends the workers mid-run."""
+    out, started = tmp_path / "grid", tmp_path / "started"
+    started.mkdir()
+    env = dict(worker_env(), GRID_CHILD_STARTED=str(started))
+    proc = start(out, 120.0, 4, "--scheduler", "local", env=env)
+    wait_for(lambda: len(list(started.iterdir())) >= 2, 120, "two started runs", proc)
+    workers = children(proc.pid)
+    try:
+        assert len(workers) >= 2
+        os.kill(proc.pid, signal.SIGKILL)
+        assert proc.wait(timeout=10) == -signal.SIGKILL
+        assert _gone(workers, timeout=15.0) == [], "a LocalCluster's workers outlived their killed client"
+    finally:
+        kill_survivors(workers)
+        proc.stdout.close()
+        proc.stderr.close()
+
+
+def test_sigterm_on_a_remote_cluster_leaves_it_running_nothing_of_the_grid(tmp_path, real_cluster):
+    """The workers are not the client's to kill: the grid's queued runs are dropped (the stop event) and its
+    futures released with the client, so the cluster is idle again once the runs in progress have ended."""
+    from distributed import Client
+
+    out, n = tmp_path / "grid", 40
+    proc = start(out, 0.3, n, "--scheduler", real_cluster.address, env=worker_env())
+    wait_for(lambda: len(_results(out)) >= 1, 120, "written run", proc)
+    check_terminated(proc, out, {}, n)
+    with Client(real_cluster.address, timeout=30) as client:
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            tasks = client.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks))
+            if tasks == 0:
+                break
+            time.sleep(0.2)
+        assert tasks == 0, f"the scheduler still holds {tasks} tasks of the terminated grid"
+        assert not any(client.processing().values())

@@ -1,0 +1,125 @@
+"""A small grid in a process of its own, for the tests that signal or kill a grid's client (SIGTERM, SIGKILL).
+
+``python -m tests.runs.grid_child OUT SECONDS N [--scheduler local]`` runs N jobs of :func:`nap` (each sleeps
+SECONDS, then returns its number, its square and a 1000-entry payload) on a grid of two workers, writing
+``OUT/rN.json``. When the grid is stopped it prints ``{"done", "total", "immediate", "signum"}`` of the
+:class:`~psgsl_pgm.runs._runner.GridInterrupted` as JSON on stdout and exits with 128 + the signal, as ``psgsl``
+does. The helpers below read Linux ``/proc``: a process's parent and start time, its children, whether it lives.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]  # the folder holding tests/: the children import tests.runs.grid_child
+PAYLOAD = list(range(1000))
+
+
+def nap(seconds: float, x: int) -> dict:
+    """One job: sleep ``seconds`` (a worker busy with a run), then the result. With ``GRID_CHILD_STARTED`` set
+    in the environment, first create the file ``$GRID_CHILD_STARTED/<x>``: the run has started."""
+    started = os.environ.get("GRID_CHILD_STARTED")
+    if started:
+        Path(started, str(x)).touch()
+    time.sleep(seconds)
+    return {"x": x, "y": x * x, "pid": os.getpid(), "payload": PAYLOAD}
+
+
+def write(result, fh) -> None:
+    fh.write(json.dumps(result).encode())
+
+
+def complete(path) -> bool:
+    """Whether ``path`` holds a whole result of :func:`nap` (a cut-short file is not valid JSON)."""
+    r = json.loads(Path(path).read_text())
+    return r["y"] == r["x"] ** 2 and r["payload"] == PAYLOAD and path.name == f"r{r['x']}.json"
+
+
+def start(out, seconds: float, n: int, *extra, env=None) -> subprocess.Popen:
+    """Start the grid of this module in a new session (a signal to it reaches no other test process)."""
+    return subprocess.Popen([sys.executable, "-m", "tests.runs.grid_child", str(out), str(seconds), str(n), *extra],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ if env is None else env), start_new_session=True)
+
+
+def _stat(pid: int):
+    """(state, parent pid, start time in clock ticks) of a process, or None when there is none."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return fields[0], int(fields[1]), int(fields[19])
+
+
+def children(pid: int) -> dict:
+    """``{child pid: start time}`` of the processes whose parent is ``pid`` now (zombies left out)."""
+    out = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            st = _stat(int(entry))
+            if st is not None and st[1] == pid and st[0] != "Z":
+                out[int(entry)] = st[2]
+    return out
+
+
+def survivors(procs: dict) -> list:
+    """The processes of ``{pid: start time}`` still running (a zombie, or a new process that reuses a pid, is
+    not a survivor)."""
+    alive = []
+    for pid, started in procs.items():
+        st = _stat(pid)
+        if st is not None and st[2] == started and st[0] != "Z":
+            alive.append(pid)
+    return alive
+
+
+def kill_survivors(procs: dict) -> None:
+    """SIGKILL the processes of ``procs`` ({pid: start time}) still running: a failed test leaves none behind."""
+    import signal
+
+    for pid in survivors(procs):
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+
+
+def wait_for(predicate, timeout: float, what: str, proc=None) -> None:
+    """Poll ``predicate`` every 20 ms until true; fail naming ``what`` after ``timeout`` s, or when ``proc``
+    ended first."""
+    import pytest
+
+    t0 = time.monotonic()
+    while not predicate():
+        if proc is not None and proc.poll() is not None:
+            pytest.fail(f"the grid ended before {what}: {proc.communicate()}")
+        if time.monotonic() - t0 > timeout:
+            if proc is not None:
+                proc.kill()
+            pytest.fail(f"no {what} within {timeout} s")
+        time.sleep(0.02)
+
+
+def main(argv=None) -> int:
+    from psgsl_pgm.runs._runner import GridInterrupted, GridJob, run_grid
+
+    args = sys.argv[1:] if argv is None else list(argv)
+    out, seconds, n = Path(args[0]), float(args[1]), int(args[2])
+    scheduler = args[4] if args[3:4] == ["--scheduler"] else None
+    jobs = [GridJob(out / f"r{x}.json", nap, (seconds, x)) for x in range(n)]
+    try:
+        run_grid(jobs, write=write, workers=2, scheduler=scheduler)
+    except GridInterrupted as exc:
+        print(json.dumps({"done": exc.done, "total": exc.total, "immediate": exc.immediate, "signum": exc.signum}))
+        return 128 + exc.signum
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
