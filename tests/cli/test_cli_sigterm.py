@@ -18,8 +18,7 @@ import pytest
 
 from psgsl_pgm.cli._grid import EXIT_INTERRUPTED, EXIT_TERMINATED, interrupted
 from psgsl_pgm.runs._runner import GridInterrupted
-from tests.runs.grid_child import children, kill_survivors, wait_for
-from tests.runs.test_runs_signals import _gone
+from tests.runs.grid_child import children, gone, kill_survivors, wait_for
 
 SEEDS = 6
 GRID = ["search", "--sources", "oven", "--seeds", str(SEEDS), "--budget", "60", "--policies", "tour",
@@ -72,6 +71,6 @@ def test_sigterm_ends_the_workers_keeps_finished_runs_and_exits_143(tmp_path):
         for f in files:  # every finished file is complete and loadable
             run = load_search_run(f)
             assert run.policy == "tour" and run.time_to_find <= 60.0
-        assert _gone(workers) == [], "worker processes survived SIGTERM of psgsl search"
+        assert gone(workers) == [], "worker processes survived SIGTERM of psgsl search"
     finally:
         kill_survivors(workers)

@@ -106,6 +106,51 @@ def wait_for(predicate, timeout: float, what: str, proc=None) -> None:
         time.sleep(0.02)
 
 
+def results(out) -> list:
+    """The result files of the grid in ``out``."""
+    return sorted(Path(out).glob("r*.json"))
+
+
+def gone(procs: dict, timeout: float = 10.0) -> list:
+    """Wait until none of ``procs`` ({pid: start time}) runs; the survivors after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while survivors(procs) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return survivors(procs)
+
+
+def check_terminated(proc, out, workers: dict, n: int, *, quiet: bool = True, timeout: float = 30.0) -> dict:
+    """SIGTERM to the client ``proc`` alone; then: exit code 143, a GridInterrupted(immediate, SIGTERM) whose
+    count is the result files on disk, every file complete, no temporary file left, nothing on stderr (``quiet``;
+    else no traceback), and none of ``workers`` ({pid: start time}) alive. Survivors are killed in any case."""
+    import signal
+
+    import pytest
+
+    try:
+        os.kill(proc.pid, signal.SIGTERM)
+        t0 = time.monotonic()
+        try:
+            stdout, stderr = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            pytest.fail(f"the grid did not end within {timeout} s of SIGTERM: {proc.communicate()}")
+        assert proc.returncode == 128 + signal.SIGTERM == 143, (proc.returncode, stdout, stderr)
+        assert time.monotonic() - t0 < timeout
+        report, files = json.loads(stdout), results(out)
+        want = {"done": len(files), "total": n, "immediate": True, "signum": signal.SIGTERM}
+        assert report == want, (report, want, stderr)
+        assert 1 <= len(files) < n, f"the grid ended before the signal (or wrote nothing): {len(files)} of {n}"
+        assert all(complete(f) for f in files), "a result file is not complete"
+        assert not list(Path(out).glob(".*.part")), "a temporary file was left behind"
+        assert (stderr == "") if quiet else ("Traceback" not in stderr), stderr
+        left = gone(workers)
+        assert left == [], f"worker processes survived SIGTERM of their client: {left}"
+        return report
+    finally:
+        kill_survivors(workers)
+
+
 def main(argv=None) -> int:
     from psgsl_pgm.runs._runner import GridInterrupted, GridJob, run_grid
 

@@ -10,71 +10,32 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
 import sys
 import time
 
 import pytest
 
-from .grid_child import children, complete, kill_survivors, start, survivors, wait_for
+from .grid_child import (
+    check_terminated,
+    children,
+    gone,
+    kill_survivors,
+    results,
+    start,
+    wait_for,
+)
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the processes from Linux /proc")
-
-
-def _results(out):
-    return sorted(out.glob("r*.json"))
-
-
-def _gone(procs, timeout=10.0):
-    """Wait until none of ``procs`` ({pid: start time}) runs; the survivors after ``timeout`` s."""
-    deadline = time.monotonic() + timeout
-    while survivors(procs) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    return survivors(procs)
-
-
-def _communicate(proc, timeout):
-    try:
-        return proc.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        pytest.fail(f"the grid did not end within {timeout} s of the signal: {proc.communicate()}")
-
-
-def check_terminated(proc, out, workers: dict, n: int, *, timeout=30.0) -> dict:
-    """SIGTERM to the client; then: exit 143 and a GridInterrupted(immediate, SIGTERM) whose count is the files
-    on disk, every file complete, no temporary left, and none of ``workers`` alive."""
-    try:
-        return _check_terminated(proc, out, workers, n, timeout)
-    finally:
-        kill_survivors(workers)
-
-
-def _check_terminated(proc, out, workers, n, timeout):
-    os.kill(proc.pid, signal.SIGTERM)
-    t0 = time.monotonic()
-    stdout, stderr = _communicate(proc, timeout)
-    assert proc.returncode == 128 + signal.SIGTERM == 143, (stdout, stderr)
-    assert time.monotonic() - t0 < timeout
-    report = json.loads(stdout)
-    files = _results(out)
-    assert report == {"done": len(files), "total": n, "immediate": True, "signum": signal.SIGTERM}, stderr
-    assert 1 <= len(files) < n, "the grid ended before the signal (or wrote nothing)"
-    assert all(complete(f) for f in files)
-    assert not list(out.glob(".*.part")), "a temporary file was left behind"
-    assert "Traceback" not in stderr, stderr
-    assert _gone(workers) == [], f"worker processes survived SIGTERM of their client: {survivors(workers)}"
-    return report
 
 
 def test_sigterm_ends_the_workers_keeps_finished_runs_and_exits_143(tmp_path):
     out, n = tmp_path / "grid", 40
     proc = start(out, 0.3, n)
     # two workers alive and at least one run written (the pool's workers and the resource tracker are children)
-    wait_for(lambda: len(_results(out)) >= 1 and len(children(proc.pid)) >= 2, 60, "written run", proc)
+    wait_for(lambda: len(results(out)) >= 1 and len(children(proc.pid)) >= 2, 60, "written run", proc)
     workers = children(proc.pid)
     check_terminated(proc, out, workers, n)
-    ran = {json.loads(f.read_text())["pid"] for f in _results(out)}
+    ran = {json.loads(f.read_text())["pid"] for f in results(out)}
     assert ran <= set(workers), "the runs were computed by processes that were not recorded as the grid's children"
 
 
@@ -90,8 +51,8 @@ def test_workers_of_a_killed_client_end_by_themselves(tmp_path):
         assert len(workers) >= 2
         os.kill(proc.pid, signal.SIGKILL)
         assert proc.wait(timeout=10) == -signal.SIGKILL  # not communicate(): an orphan would hold the pipes
-        assert _gone(workers, timeout=10.0) == [], "workers of a killed client kept running"
-        assert _results(out) == []
+        assert gone(workers, timeout=10.0) == [], "workers of a killed client kept running"
+        assert results(out) == []
     finally:
         kill_survivors(workers)
         proc.stdout.close()
