@@ -7,8 +7,6 @@ signal goes to that process alone. Its LocalCluster's worker processes are read 
 
 from __future__ import annotations
 
-import os
-import signal
 import sys
 import time
 
@@ -16,11 +14,10 @@ import pytest
 
 from tests.runs.grid_child import (
     check_terminated,
-    children,
-    gone,
-    kill_survivors,
+    kill_grid,
     results,
     start,
+    terminate_grid,
     wait_for,
 )
 
@@ -30,30 +27,13 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="re
 
 
 def test_sigterm_ends_a_local_clusters_workers_and_exits_143(tmp_path):
-    out, n = tmp_path / "grid", 40
-    proc = start(out, 0.3, n, "--scheduler", "local", env=worker_env())
-    wait_for(lambda: len(results(out)) >= 1 and len(children(proc.pid)) >= 2, 120, "written run", proc)
-    workers = children(proc.pid)  # the LocalCluster's worker processes (their nannies live in the client)
-    check_terminated(proc, out, workers, n, quiet=False)  # dask may log a warning on a loaded machine
+    # the LocalCluster's worker processes are the client's children (their nannies live in the client)
+    terminate_grid(tmp_path, "--scheduler", "local", env=worker_env(), quiet=False)  # dask may log a warning
 
 
 def test_a_local_clusters_workers_end_when_the_client_is_killed(tmp_path):
     """SIGKILL: dask's own check (each worker process watches a pipe from its parent) ends the workers mid-run."""
-    out, started = tmp_path / "grid", tmp_path / "started"
-    started.mkdir()
-    env = dict(worker_env(), GRID_CHILD_STARTED=str(started))
-    proc = start(out, 120.0, 4, "--scheduler", "local", env=env)
-    wait_for(lambda: len(list(started.iterdir())) >= 2, 120, "two started runs", proc)
-    workers = children(proc.pid)
-    try:
-        assert len(workers) >= 2
-        os.kill(proc.pid, signal.SIGKILL)
-        assert proc.wait(timeout=10) == -signal.SIGKILL
-        assert gone(workers, timeout=15.0) == [], "a LocalCluster's workers outlived their killed client"
-    finally:
-        kill_survivors(workers)
-        proc.stdout.close()
-        proc.stderr.close()
+    kill_grid(tmp_path, "--scheduler", "local", env=worker_env())
 
 
 def test_sigterm_on_a_remote_cluster_leaves_it_running_nothing_of_the_grid(tmp_path, real_cluster):

@@ -151,6 +151,42 @@ def check_terminated(proc, out, workers: dict, n: int, *, quiet: bool = True, ti
         kill_survivors(workers)
 
 
+def terminate_grid(tmp_path, *extra, env=None, n: int = 40, quiet: bool = True, timeout: float = 120.0):
+    """Start a grid of ``n`` runs of 0.3 s (``extra``: e.g. ``--scheduler local``), wait for a written run and two
+    children, record the children, then :func:`check_terminated`. Returns the report, the children and the
+    result folder."""
+    out = Path(tmp_path) / "grid"
+    proc = start(out, 0.3, n, *extra, env=env)
+    wait_for(lambda: len(results(out)) >= 1 and len(children(proc.pid)) >= 2, timeout, "written run", proc)
+    workers = children(proc.pid)
+    return check_terminated(proc, out, workers, n, quiet=quiet), workers, out
+
+
+def kill_grid(tmp_path, *extra, env=None, timeout: float = 120.0) -> dict:
+    """Start a grid of runs of two minutes, wait until two have started, record the client's children, SIGKILL
+    the client alone; assert that every child has ended within 15 s (an orphan would still be in its run) and
+    that no result was written. Returns the children."""
+    import signal
+
+    out, started = Path(tmp_path) / "grid", Path(tmp_path) / "started"
+    started.mkdir()
+    proc = start(out, 120.0, 4, *extra, env=dict(os.environ if env is None else env, GRID_CHILD_STARTED=str(started)))
+    wait_for(lambda: len(list(started.iterdir())) >= 2, timeout, "two started runs", proc)
+    workers = children(proc.pid)
+    try:
+        assert len(workers) >= 2, workers
+        os.kill(proc.pid, signal.SIGKILL)
+        assert proc.wait(timeout=10) == -signal.SIGKILL  # not communicate(): an orphan would hold the pipes
+        left = gone(workers, timeout=15.0)
+        assert left == [], f"workers of a killed client kept running: {left}"
+        assert results(out) == []
+        return workers
+    finally:
+        kill_survivors(workers)
+        proc.stdout.close()
+        proc.stderr.close()
+
+
 def main(argv=None) -> int:
     from psgsl_pgm.runs._runner import GridInterrupted, GridJob, run_grid
 

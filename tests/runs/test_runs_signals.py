@@ -15,48 +15,21 @@ import time
 
 import pytest
 
-from .grid_child import (
-    check_terminated,
-    children,
-    gone,
-    kill_survivors,
-    results,
-    start,
-    wait_for,
-)
+from .grid_child import kill_grid, terminate_grid
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the processes from Linux /proc")
 
 
 def test_sigterm_ends_the_workers_keeps_finished_runs_and_exits_143(tmp_path):
-    out, n = tmp_path / "grid", 40
-    proc = start(out, 0.3, n)
-    # two workers alive and at least one run written (the pool's workers and the resource tracker are children)
-    wait_for(lambda: len(results(out)) >= 1 and len(children(proc.pid)) >= 2, 60, "written run", proc)
-    workers = children(proc.pid)
-    check_terminated(proc, out, workers, n)
-    ran = {json.loads(f.read_text())["pid"] for f in results(out)}
+    # the local pool: its two workers and multiprocessing's resource tracker are the client's children
+    _, workers, out = terminate_grid(tmp_path)
+    ran = {json.loads(f.read_text())["pid"] for f in out.glob("r*.json")}
     assert ran <= set(workers), "the runs were computed by processes that were not recorded as the grid's children"
 
 
 def test_workers_of_a_killed_client_end_by_themselves(tmp_path):
     """SIGKILL cannot be handled: each worker notices that its parent is gone and exits mid-run."""
-    out, started = tmp_path / "grid", tmp_path / "started"
-    started.mkdir()
-    env = dict(os.environ, GRID_CHILD_STARTED=str(started))
-    proc = start(out, 120.0, 4, env=env)  # runs of two minutes: an orphan would be alive long after the check
-    wait_for(lambda: len(list(started.iterdir())) >= 2, 60, "two started runs", proc)
-    workers = children(proc.pid)
-    try:
-        assert len(workers) >= 2
-        os.kill(proc.pid, signal.SIGKILL)
-        assert proc.wait(timeout=10) == -signal.SIGKILL  # not communicate(): an orphan would hold the pipes
-        assert gone(workers, timeout=10.0) == [], "workers of a killed client kept running"
-        assert results(out) == []
-    finally:
-        kill_survivors(workers)
-        proc.stdout.close()
-        proc.stderr.close()
+    kill_grid(tmp_path)
 
 
 def _terminate(x):
