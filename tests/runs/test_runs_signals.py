@@ -43,17 +43,29 @@ def _write(result, fh):
     fh.write(json.dumps(result).encode())
 
 
+class _Unhandled(Exception):
+    pass
+
+
+def _fallback(signum, frame):
+    raise _Unhandled("SIGTERM reached the test's own handler: run_grid installed none")
+
+
 def test_sigterm_in_process_stops_at_once_and_restores_the_handlers(tmp_path):
     from psgsl_pgm.runs._runner import GridInterrupted, GridJob, run_grid
 
     (tmp_path / "r0.json").write_text("{}")
     jobs = [GridJob(tmp_path / f"r{x}.json", _terminate, (x,)) for x in range(3)]
-    before = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
-    t0 = time.monotonic()
-    with pytest.raises(GridInterrupted) as exc:
-        run_grid(jobs, write=_write, workers=1)
-    assert time.monotonic() - t0 < 4
+    old = signal.signal(signal.SIGTERM, _fallback)  # were run_grid's handler missing, the test fails, pytest lives
+    try:
+        before = signal.getsignal(signal.SIGINT)
+        t0 = time.monotonic()
+        with pytest.raises(GridInterrupted) as exc:
+            run_grid(jobs, write=_write, workers=1)
+        assert time.monotonic() - t0 < 4
+        assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == (_fallback, before)
+    finally:
+        signal.signal(signal.SIGTERM, old)
     assert (exc.value.done, exc.value.total, exc.value.immediate, exc.value.signum) == (1, 3, True, signal.SIGTERM)
     assert str(exc.value) == "stopped by SIGTERM: 1 of 3 runs done"
     assert [p.name for p in tmp_path.iterdir()] == ["r0.json"]
-    assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before
