@@ -83,12 +83,9 @@ def add_parser(subparsers):
 
 def run(args) -> int:
     """Run ``psgsl benchmark``; returns the exit code (bad input: one line on stderr, exit 2)."""
-    from ._usage import UsageError as _UsageError
+    from ._usage import reporting_usage_errors
 
-    try:
-        return _run(args)
-    except (ValueError, TypeError) as exc:  # the library's messages name what was expected and what arrived
-        raise _UsageError(str(exc)) from None
+    return reporting_usage_errors(_run, args)
 
 
 def _run(args) -> int:

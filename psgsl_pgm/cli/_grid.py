@@ -7,20 +7,24 @@ Used by ``psgsl experiment`` and ``psgsl search``::
     try:
         run_experiment(..., scheduler=args.scheduler)
     except GridInterrupted as exc:
-        return interrupted(args, exc, where=out / "runs")  # one line on stderr, exit code 130
+        return interrupted(args, exc, where=out / "runs")  # one line on stderr, exit code 130 (SIGTERM: 143)
 """
 
 from __future__ import annotations
 
 import argparse
 import shlex
+import signal
 import sys
 
-__all__ = ["EXIT_INTERRUPTED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "interrupted", "positive_float",
+__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "interrupted", "positive_float",
            "positive_int", "seed_count", "seed_range", "worker_count"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
+
+#: Exit code after SIGTERM (128 + SIGTERM), as shells report a process it ended.
+EXIT_TERMINATED = 128 + signal.SIGTERM
 
 #: Size guards of the command line: more seeds than this is years of runs, more workers than this no machine has.
 MAX_SEEDS = 10_000
@@ -102,10 +106,13 @@ def add_scheduler_argument(parser) -> None:
 
 
 def interrupted(args, exc, *, where) -> int:
-    """Print the one-line Ctrl-C report (runs done, where, how to resume) on stderr; return 130."""
+    """Print the one-line report of a stopped grid (runs done, where, how to resume) on stderr; return 128 + the
+    signal: :data:`EXIT_INTERRUPTED` after Ctrl-C, :data:`EXIT_TERMINATED` after SIGTERM."""
     argv = getattr(args, "argv", None)
     again = shlex.join(["psgsl", *argv]) if argv else f"psgsl {args.command} with the same arguments"
     how = "in-progress runs abandoned" if exc.immediate else "runs in progress were finished"
-    print(f"psgsl {args.command}: interrupted: {exc.done} of {exc.total} runs done in {where} ({how}); "
+    signum = getattr(exc, "signum", signal.SIGINT)
+    what = "interrupted" if signum == signal.SIGINT else f"terminated by {signal.Signals(signum).name}"
+    print(f"psgsl {args.command}: {what}: {exc.done} of {exc.total} runs done in {where} ({how}); "
           f"resume with: {again}", file=sys.stderr, flush=True)
-    return EXIT_INTERRUPTED
+    return 128 + int(signum)

@@ -24,12 +24,9 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``psgsl world check``; bad files or keys raise ValueError (one line, exit 2, nothing written)."""
-    from ._usage import UsageError as _UsageError
+    from ._usage import LIBRARY_ERRORS, reporting_usage_errors
 
-    try:
-        return _check(args)
-    except (ValueError, TypeError, FileNotFoundError) as exc:
-        raise _UsageError(str(exc)) from None
+    return reporting_usage_errors(_check, args, errors=(*LIBRARY_ERRORS, FileNotFoundError))
 
 
 def _check(args) -> int:

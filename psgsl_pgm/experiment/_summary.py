@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io._json import json_safe
 from ..runs._runner import atomic_write
 from ._config import VARIANTS
 from ._metrics import calibration_summary, mean_ci
@@ -83,20 +84,9 @@ def summarize(runs) -> dict:
     return out
 
 
-def _clean(obj):
-    """JSON-safe copy (NaN -> None: ``json`` would write the non-standard token NaN)."""
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
-
-
 def write_summary(summary: dict, path) -> Path:
     """``summary`` as strict JSON (NaN -> null) at ``path``, written atomically."""
-    text = json.dumps(_clean(summary), indent=2, allow_nan=False) + "\n"
+    text = json.dumps(json_safe(summary), indent=2, allow_nan=False) + "\n"
     return atomic_write(path, lambda t, fh: fh.write(t.encode("utf-8")), text)
 
 

@@ -30,6 +30,13 @@ are written; then :class:`GridInterrupted` is raised. A second Ctrl-C stops at o
 remote cluster the unfinished runs are cancelled), runs in progress are lost, finished files are untouched.
 The CLI turns :class:`GridInterrupted` into one line and exit code 130 (:func:`psgsl_pgm.cli._grid.interrupted`).
 
+SIGTERM (``kill``, a batch system, ``timeout``; from the main thread) stops at once, as a second Ctrl-C does:
+workers are killed, runs in progress are lost, finished files are untouched, and :class:`GridInterrupted` is
+raised with ``signum = SIGTERM`` (the CLI's exit code is 143). Should the client die without cleaning up
+(SIGKILL, or SIGTERM while a grid runs outside the main thread), its workers end by themselves: a local pool's
+worker checks that the client is still its parent (:func:`_exit_with_parent`), a LocalCluster's worker is ended
+by dask when its parent is gone.
+
 Minimal use::
 
     from psgsl_pgm.runs._runner import GridJob, run_grid
@@ -51,8 +58,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["CONNECT_TIMEOUT", "GridInterrupted", "GridJob", "GridReport", "MAX_ATTEMPTS", "WORKER_ENVIRON",
-           "atomic_write", "command_label", "grid_folder", "run_grid"]
+__all__ = ["CONNECT_TIMEOUT", "GridInterrupted", "GridJob", "GridReport", "MAX_ATTEMPTS", "PARENT_POLL",
+           "WORKER_ENVIRON", "atomic_write", "command_label", "grid_folder", "run_grid"]
 
 #: A job is given up (RuntimeError) after its worker process died this many times (dask's default
 #: ``distributed.scheduler.allowed-failures`` + 1 for the local pool; dask applies its own setting).
@@ -111,23 +118,30 @@ class GridReport:
 
 
 class GridInterrupted(KeyboardInterrupt):
-    """Ctrl-C stopped the grid; every finished run is on disk.
+    """Ctrl-C or SIGTERM stopped the grid; every finished run is on disk.
 
     Attributes
     ----------
     done, total : int
         Jobs whose result file exists now, and jobs in the grid.
     immediate : bool
-        True after a second Ctrl-C (runs in progress were abandoned), False when they were let finish.
+        True after a second Ctrl-C or a SIGTERM (runs in progress were abandoned), False when they were let finish.
+    signum : int
+        The signal that stopped the grid: :data:`signal.SIGINT` (Ctrl-C) or :data:`signal.SIGTERM`.
     """
 
-    def __init__(self, done: int, total: int, *, immediate: bool):
-        super().__init__(f"interrupted: {done} of {total} runs done")
-        self.done, self.total, self.immediate = done, total, immediate
+    def __init__(self, done: int, total: int, *, immediate: bool, signum: int = signal.SIGINT):
+        what = "interrupted" if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
+        super().__init__(f"{what}: {done} of {total} runs done")
+        self.done, self.total, self.immediate, self.signum = done, total, immediate, int(signum)
 
 
 class _Abort(BaseException):
-    """Raised in the main thread by the second Ctrl-C."""
+    """Raised in the main thread by the second Ctrl-C (``signum`` SIGINT) or by SIGTERM."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
 
 
 class _Skipped:
@@ -271,6 +285,47 @@ def _ignore_sigint():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+#: Seconds between a pool worker's checks that its client is alive (:func:`_exit_with_parent`).
+PARENT_POLL = 0.5
+
+
+def _exit_with_parent(client_pid: int, interval: float = PARENT_POLL) -> threading.Thread:
+    """End this worker process (``os._exit``) as soon as its parent is no longer ``client_pid``.
+
+    The client kills its workers on Ctrl-C, SIGTERM and errors; this covers the client dying without a word
+    (SIGKILL, the OOM killer, a crash), after which the workers are re-parented and would compute on, then wait
+    for work forever (:class:`concurrent.futures.ProcessPoolExecutor` has no parent-death check of its own: its
+    workers block on the call queue, whose write end they hold themselves). Why a thread polling
+    :func:`os.getppid`:
+
+    * it stops the run in progress too (a run takes minutes), not only between runs;
+    * a re-parented process's parent id changes on every POSIX system (to init or a subreaper), so no Linux-only
+      ``prctl(PR_SET_PDEATHSIG)``, which would also fire when the client *thread* that spawned the pool exits;
+    * ``client_pid`` is the client's pid passed in (not read here), so a client that died before the worker
+      started is noticed too;
+    * nothing is shared with the client: a pipe whose end-of-file tells the worker (what dask does for its
+      LocalCluster workers) stays open as long as any process holds its write end, e.g. one forked from the
+      client.
+
+    Cost: one thread asleep but for a ``getppid`` call every ``interval`` seconds; results are unaffected. It
+    needs the GIL to run, so a compiled call that holds the GIL delays the exit until it returns.
+    """
+    def watch():
+        while os.getppid() == client_pid:
+            time.sleep(interval)
+        os._exit(1)
+
+    thread = threading.Thread(target=watch, name="psgsl-parent-watch", daemon=True)
+    thread.start()
+    return thread
+
+
+def _init_worker(client_pid: int):
+    """Initializer of the local pool's workers: ignore SIGINT, end with the client (:func:`_exit_with_parent`)."""
+    _ignore_sigint()
+    _exit_with_parent(client_pid)
+
+
 def dask_setup(worker=None):  # noqa: D401 - dask preload hook (LocalCluster workers load this module)
     """dask preload hook: the worker process ignores SIGINT (see :func:`_ignore_sigint`)."""
     _ignore_sigint()
@@ -291,39 +346,56 @@ def _environ(extra: Mapping):
 
 
 @contextmanager
-def _sigint_ignored():
-    """SIGINT ignored while worker processes are spawned (they inherit the disposition; Python keeps it)."""
+def _ignored(*signums):
+    """The signals ignored for the duration of the block (main thread only; elsewhere nothing changes)."""
     main = threading.current_thread() is threading.main_thread()
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    old = {s: signal.signal(s, signal.SIG_IGN) for s in signums} if main else {}
     try:
         yield
     finally:
-        if main:
-            signal.signal(signal.SIGINT, old)
+        for s, handler in old.items():
+            signal.signal(s, handler)
+
+
+def _sigint_ignored():
+    """SIGINT ignored while worker processes are spawned (they inherit the disposition; Python keeps it). SIGTERM
+    is left alone there: workers that ignored it could not be terminated."""
+    return _ignored(signal.SIGINT)
+
+
+def _signals_ignored():
+    """SIGINT and SIGTERM ignored while the workers are being killed: a repeated signal cannot cut that short."""
+    return _ignored(signal.SIGINT, signal.SIGTERM)
 
 
 class _Interrupts:
-    """SIGINT handler for the duration of a grid: first → flag, second → :class:`_Abort` in the main thread."""
+    """Signal handlers for the duration of a grid, in the main thread: the first SIGINT → flag, the second →
+    :class:`_Abort`; SIGTERM → :class:`_Abort` at once."""
 
     def __init__(self):
         self.count = 0
         self.installed = threading.current_thread() is threading.main_thread()
-        self._old = None
+        self._old = {}
 
     def __enter__(self):
         if self.installed:
-            self._old = signal.signal(signal.SIGINT, self._handle)
+            self._old = {signal.SIGINT: signal.signal(signal.SIGINT, self._handle),
+                         signal.SIGTERM: signal.signal(signal.SIGTERM, self._terminate)}
         return self
 
     def __exit__(self, *exc):
-        if self.installed:
-            signal.signal(signal.SIGINT, self._old)
+        for s, handler in self._old.items():
+            signal.signal(s, handler)
+        self._old = {}
         return False
 
     def _handle(self, signum, frame):
         self.count += 1
         if self.count >= 2:
-            raise _Abort()
+            raise _Abort(signal.SIGINT)
+
+    def _terminate(self, signum, frame):
+        raise _Abort(signal.SIGTERM)
 
     @property
     def stop(self) -> bool:
@@ -374,7 +446,7 @@ class _Pool:
             from concurrent.futures import ProcessPoolExecutor
 
             self.pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=mp.get_context("spawn"),
-                                            initializer=_ignore_sigint)
+                                            initializer=_init_worker, initargs=(os.getpid(),))
         return self.pool
 
     def slots(self):
@@ -570,7 +642,7 @@ def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable |
     Raises
     ------
     GridInterrupted
-        On Ctrl-C (see the module docstring); finished runs are on disk.
+        On Ctrl-C or SIGTERM (see the module docstring); finished runs are on disk.
     ValueError
         Duplicate paths, a refused stored result, a bad ``scheduler`` or ``workers``.
     RuntimeError
@@ -645,22 +717,23 @@ def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable |
                     bar.update()
             if interrupts.stop:
                 raise GridInterrupted(len(done_before) + computed, total, immediate=False)
-    except _Abort:
-        with _sigint_ignored():
+    except _Abort as stop:
+        with _signals_ignored():
             if backend is not None:
                 backend.abort()
                 backend = None
-        raise GridInterrupted(len(done_before) + computed, total, immediate=True) from None
+        raise GridInterrupted(len(done_before) + computed, total, immediate=True, signum=stop.signum) from None
     finally:
         bar.close()
         if backend is not None:
             try:
-                with interrupts:  # waiting for the workers to finish: a second Ctrl-C still abandons them at once
+                with interrupts:  # waiting for the workers to finish: a second Ctrl-C or SIGTERM abandons them
                     backend.close()
-            except _Abort:
-                with _sigint_ignored():
+            except _Abort as stop:
+                with _signals_ignored():
                     backend.abort()
-                raise GridInterrupted(len(done_before) + computed, total, immediate=True) from None
+                raise GridInterrupted(len(done_before) + computed, total, immediate=True,
+                                      signum=stop.signum) from None
     if error is not None:
         raise error
     return GridReport(total, len(done_before), computed)

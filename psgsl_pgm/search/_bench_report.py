@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io._json import json_safe
 from ._metrics import wilson_interval
 from ._store import load_search_run
 from ._survival import kaplan_meier, km_median, nested_bootstrap
@@ -238,18 +239,8 @@ def write_report(out, settings: dict, *, figures: bool = True) -> dict:
     files = _figures(out, stats, conditions) if figures else []
     summary = {"settings": settings, "version": __version__, "primary": PRIMARY | {"result": comp["primary"]},
                "costs": comp["costs"], "arms": stats}
-    text = json.dumps(_finite(summary), indent=1, sort_keys=True, allow_nan=False) + "\n"
+    text = json.dumps(json_safe(summary), indent=1, sort_keys=True, allow_nan=False) + "\n"
     write_file_atomically(out / "summary.json", lambda fh: fh.write(text.encode("utf-8")))
     md = _markdown(settings, stats, comp, episodes, files, __version__)
     write_file_atomically(out / "report.md", lambda fh: fh.write(md.encode("utf-8")))
     return summary
-
-
-def _finite(obj):
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj

@@ -14,6 +14,7 @@ import numpy as np
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, source_label
 from ..experiment._driver import _world
 from ..experiment._metrics import calibration_summary, mean_ci
+from ..io._json import json_safe
 from ..runs._key import digest, run_key, world_key
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import wilson_interval
@@ -155,20 +156,9 @@ def _paired(groups: dict, *, source=None, estimator=None) -> dict:
     return out
 
 
-def _finite(obj):
-    """NaN (no interval from one run) -> None, so that the files are strict JSON."""
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
-
-
 def _write_json(obj, path: Path) -> None:
     tmp = path.with_name(path.name + ".part")
-    tmp.write_text(json.dumps(_finite(obj), indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
+    tmp.write_text(json.dumps(json_safe(obj), indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
     os.replace(tmp, path)
 
 
@@ -211,7 +201,7 @@ def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
         by_key = {k: sorted(by_key[k], key=lambda r: r.seed) for k in sorted(by_key, key=order.get)}
         folder = out / f"{source_label(source)}-{estimator}"
         folder.mkdir(parents=True, exist_ok=True)
-        summary = _finite({k: summarize_runs(v) for k, v in by_key.items()})
+        summary = json_safe({k: summarize_runs(v) for k, v in by_key.items()})
         _write_json(summary, folder / "summary.json")
         paired = _paired(by_key, source=source, estimator=estimator)
         if paired:  # nothing paired (one policy/variant, or fewer than 2 common seeds): no paired.json

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..core._ontology import Ontology
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS
+from ._house_ontology import _reference_arguments
 
 __all__ = ["GENERATOR_REFERENCE_SEEDS", "generated_ontology"]
 
@@ -48,9 +49,4 @@ def generated_ontology(*, reference_seeds=GENERATOR_REFERENCE_SEEDS, pseudo_coun
     Ontology
         Classes :data:`psgsl_pgm.sim.HOUSE_CLASSES`, rooms :data:`psgsl_pgm.sim.HOUSE_ROOMS`.
     """
-    seeds = tuple(int(s) for s in reference_seeds)
-    if not seeds:
-        raise ValueError("reference_seeds must name at least one reference house")
-    if not (np.isfinite(pseudo_count) and pseudo_count > 0):
-        raise ValueError(f"pseudo_count must be a positive number of cells, got {pseudo_count!r}")
-    return _cached(seeds, float(pseudo_count))
+    return _cached(*_reference_arguments(reference_seeds, pseudo_count))

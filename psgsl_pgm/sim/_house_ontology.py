@@ -73,9 +73,16 @@ def house_ontology(*, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0
     >>> bool(kitchen[0] > 10 * bedroom[0])          # ovens are far likelier in a kitchen
     True
     """
+    return _cached(*_reference_arguments(reference_seeds, pseudo_count))
+
+
+def _reference_arguments(reference_seeds, pseudo_count) -> tuple[tuple, float]:
+    """The checked arguments of an ontology counted on reference houses (:func:`house_ontology`,
+    :func:`psgsl_pgm.sim.generated_ontology`): the seeds as a non-empty tuple of ints (hashable, for the cache) and
+    the Dirichlet pseudo-count as a float > 0 (no seeds, or a count not > 0: a :class:`ValueError` naming it)."""
     seeds = tuple(int(s) for s in reference_seeds)
     if not seeds:
         raise ValueError("reference_seeds must name at least one reference house")
     if not (np.isfinite(pseudo_count) and pseudo_count > 0):
         raise ValueError(f"pseudo_count must be a positive number of cells, got {pseudo_count!r}")
-    return _cached(seeds, float(pseudo_count))
+    return seeds, float(pseudo_count)

@@ -15,26 +15,12 @@ import pytest
 pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
 
 from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from psgsl_pgm.experiment._replay import replay, replay_frames, replay_steps
 from psgsl_pgm.ros import read_bag
+from psgsl_pgm.ros._types import typestore
 from psgsl_pgm.sim import Camera, DetectorModel, default_house
 
-# the test's own copy of the message layouts (the lab's GasSensor and Anemometer; vision_msgs 4.x)
-DEFS = {
-    "olfaction_msgs/msg/GasSensor": "std_msgs/Header header\nuint8 technology\nuint8 manufacturer\nuint8 mpn\n"
-                                    "float64 raw\nuint8 raw_units\nfloat64 raw_air\nfloat64 calib_a\nfloat64 calib_b\n",
-    "olfaction_msgs/msg/Anemometer": "std_msgs/Header header\nstring sensor_label\nfloat32 wind_speed\n"
-                                     "float32 wind_direction\n",
-    "vision_msgs/msg/ObjectHypothesis": "string class_id\nfloat64 score\n",
-    "vision_msgs/msg/ObjectHypothesisWithPose": "vision_msgs/ObjectHypothesis hypothesis\n"
-                                                "geometry_msgs/PoseWithCovariance pose\n",
-    "vision_msgs/msg/BoundingBox3D": "geometry_msgs/Pose center\ngeometry_msgs/Vector3 size\n",
-    "vision_msgs/msg/Detection3D": "std_msgs/Header header\nvision_msgs/ObjectHypothesisWithPose[] results\n"
-                                   "vision_msgs/BoundingBox3D bbox\nstring id\n",
-    "vision_msgs/msg/Detection3DArray": "std_msgs/Header header\nvision_msgs/Detection3D[] detections\n",
-}
 T0 = 1_750_000_000 * 10**9
 WIND = np.array([0.3, -0.1])
 ODOM = np.array([0.5, -0.3, 0.2])  # map -> odom
@@ -65,11 +51,7 @@ def ns(t):
 
 def make_bag(path, storage):
     rng = np.random.default_rng(7)
-    store = get_typestore(Stores.ROS2_HUMBLE)
-    types = {}
-    for name, text in DEFS.items():
-        types.update(get_types_from_msg(text, name))
-    store.register(types)
+    store = typestore()  # the message types the library registers (lab's olfaction_msgs, vision_msgs 4.x)
     T = store.types
 
     def header(t, frame):

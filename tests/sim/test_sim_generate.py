@@ -157,6 +157,18 @@ def test_generated_ontology_counts_reference_houses_only():
 
 
 @pytest.mark.parametrize("kwargs, match", [
+    ({"pseudo_count": 0.0}, "pseudo_count must be a positive number of cells, got 0.0"),
+    ({"pseudo_count": -1.0}, "pseudo_count must be a positive"),
+    ({"pseudo_count": float("nan")}, "pseudo_count must be a positive"),
+    ({"pseudo_count": float("inf")}, "pseudo_count must be a positive"),
+    ({"reference_seeds": ()}, "reference_seeds must name at least one reference house"),
+])
+def test_generated_ontology_rejects_bad_options(kwargs, match):
+    with pytest.raises(ValueError, match=match):  # before any reference house is generated
+        generated_ontology(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, match", [
     ({"n_rooms": 2}, "n_rooms must be in"),
     ({"n_rooms": 9}, "n_rooms must be in"),
     ({"n_rooms": 2, "room_types": list(ROOM_TYPES) + ["Bedroom"] * 3}, "n_rooms must be in"),

@@ -1,0 +1,33 @@
+"""The one wrapper that turns a command's bad-input errors into a :class:`UsageError` (one line, exit code 2)."""
+
+import pytest
+
+from psgsl_pgm.cli._usage import UsageError, reporting_usage_errors
+
+
+def _raising(exc):
+    def command(args):
+        raise exc
+
+    return command
+
+
+@pytest.mark.parametrize("exc", [ValueError("--x must be > 0, got -1"), TypeError("--x must be a number, got 'a'")])
+def test_library_errors_become_usage_errors_with_their_message(exc):
+    with pytest.raises(UsageError) as info:
+        reporting_usage_errors(_raising(exc), None)
+    assert str(info.value) == str(exc)
+    assert info.value.__cause__ is None and info.value.__suppress_context__  # no library traceback attached
+
+
+def test_exit_code_and_args_pass_through():
+    assert reporting_usage_errors(lambda args: args + 1, 6) == 7
+
+
+def test_other_errors_are_not_reported_as_usage():
+    with pytest.raises(KeyError):  # a bug keeps its traceback
+        reporting_usage_errors(_raising(KeyError("k")), None)
+    with pytest.raises(FileNotFoundError):  # only when the command asks for it
+        reporting_usage_errors(_raising(FileNotFoundError("a.yaml")), None)
+    with pytest.raises(UsageError, match="a.yaml"):
+        reporting_usage_errors(_raising(FileNotFoundError("a.yaml")), None, errors=(ValueError, FileNotFoundError))
