@@ -15,7 +15,9 @@ decision by the branching factor per level while still seeing only a few metres 
 matches the found diameter 2r (a candidate every found disc), keeps ≈ 100 candidates in the embedded house,
 and a decision is one pass of the same gains over them; the robot re-plans at every stop, so a far target is
 only a direction until it is within the horizon. ``greedy`` keeps the horizon's candidates (it drives towards
-the MAP cell and re-plans every ``horizon`` metres).
+the MAP cell and re-plans every ``horizon`` metres). The near lattice includes the finder cells of
+:meth:`FreeSpace.cover`, so that a stop can find every source a drivable cell can (the closed loop covers its
+space with its detection model before the first decision).
 
 **P_f** is the probability of finding the source at p under the detection model of the success rule
 (:class:`psgsl_pgm.search.DetectionModel`): P_f(p) = (1 − m) Σ_{c: d(p, R(c)) ≤ r} p(c), R(c) the found region of
