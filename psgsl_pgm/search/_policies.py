@@ -363,25 +363,39 @@ def space_aware_gain(sit: Situation, cells):
     entr(u) = w entr(p) + p entr(w). Every term is a product of a static row (ℓ, entr(ℓ), d_p, cached per cell)
     with p or entr(p), corrected on the few hypotheses that p finds: no (K, H·W) logarithm per decision.
     """
-    space = sit.space
-    post = sit.posterior.ravel()
-    ell = 2.0 * sit.found_radius
-    disc_bits = np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
+    p_f, rows = _found_mass(sit, cells)
+    return _space_aware_values(sit, _SpaceAware(sit), cells, p_f, rows)
 
-    def value(d, h_bits):
-        arg = d / ell + 2.0 ** (np.maximum(h_bits - disc_bits, 0.0) - 1.0) - 0.5
+
+class _SpaceAware:
+    """The parts of :func:`space_aware_gain` shared by every candidate of a decision."""
+
+    def __init__(self, sit: Situation):
+        space = sit.space
+        self.post = post = sit.posterior.ravel()
+        self.ell = 2.0 * sit.found_radius
+        self.disc_bits = np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
+        self.dist_now = dist_now = space.distances(sit.cell)
+        ok = np.isfinite(dist_now)
+        self.v_now = self.value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
+        self.a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
+        self.e_w = float(entr(1.0 - self.a))  # entr(w) on those hypotheses (0 for a detector that never misses)
+        self.e = entr(post)
+        self.pe = np.stack([post, self.e], axis=1)  # (n, 2)
+        self.gain = _semantic_gain(sit)  # I(S; O_n) per cell, None for olfaction
+
+    def value(self, d, h_bits):
+        """V = log₂(D/ℓ + 2^{max(H − disc, 0) − 1} − ½), and the argument itself where it is not positive."""
+        arg = d / self.ell + 2.0 ** (np.maximum(h_bits - self.disc_bits, 0.0) - 1.0) - 0.5
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
 
-    dist_now = space.distances(sit.cell)
-    ok = np.isfinite(dist_now)
-    v_now = value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
-    p_f, rows = _found_mass(sit, cells)
-    a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
-    e_w = float(entr(1.0 - a))  # entr(w) on those hypotheses (0 for a detector that never misses)
-    e = entr(post)
+
+def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows) -> np.ndarray:
+    """:func:`space_aware_gain` of ``cells`` with their P_f and found hypotheses (:func:`_found_mass`): each
+    candidate's own products and the same element-wise operations, whichever other candidates come with it."""
+    post, e, pe, a, e_w = sa.post, sa.e, sa.pe, sa.a, sa.e_w
     k_n = len(cells)
-    pe = np.stack([post, e], axis=1)  # (n, 2)
     dense = np.empty((k_n, 6))  # per candidate: L·p, L·e, H_b·p, entr(L)·p, (L∘d)·p, d·p  (L = P(hit), e = entr(p))
     corr = np.empty((k_n, 8))  # the same six over the hypotheses the candidate finds, then Σp and Σe there
     for k, (block, row, c) in enumerate(zip(_hit_blocks(sit, cells), rows, np.asarray(cells).tolist())):
@@ -406,16 +420,135 @@ def space_aware_gain(sit: Situation, cells):
     d_all = times_u(5)
     outcomes = ((z_hit, l_ent_u + u_e_hit, d_hit),  # hit
                 (mass - z_hit, (ent_u - l_ent_u) + (u_e_bin - u_e_hit), d_all - d_hit))  # miss
-    phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)
-    expected = np.zeros((k_n, len(space.headings)))
+    if sa.gain is None:
+        phi_o_bits = np.zeros((k_n, len(sit.space.headings))) / np.log(2)  # (K, n_h)
+    else:
+        phi_o_bits = sit.space.view_gain(sa.gain, cells) / np.log(2)
+    expected = np.zeros((k_n, len(sit.space.headings)))
     norm = np.where(mass > 0, mass, 1.0)
     for z, t, d in outcomes:
         pos = z > 0
         zz = np.where(pos, z, 1.0)
         h_bits = np.where(pos, np.log(zz) + t / zz, 0.0) / np.log(2)
         d_h = np.where(pos, d / zz, 0.0)
-        expected += (np.where(pos, z, 0.0) / norm)[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
-    return v_now - (1.0 - p_f[:, None]) * expected
+        expected += (np.where(pos, z, 0.0) / norm)[:, None] * sa.value(d_h[:, None], h_bits[:, None] - phi_o_bits)
+    return sa.v_now - (1.0 - p_f[:, None]) * expected
+
+
+_EPS = float(np.finfo(np.float64).eps)
+
+
+def _space_aware_tiles(sit: Situation, cells) -> np.ndarray:
+    """(K, 4, T + 1) per candidate cell and tile t: P(hit | s) ∈ [lo_t, hi_t] on its cells (:func:`_hit_rows`),
+    min(entr(lo_t), entr(hi_t)) ≤ entr(P) and min(entr(1 − hi_t), entr(1 − lo_t)) ≤ entr(1 − P) there (entr is
+    concave), cached per cell with the rows."""
+    _hit_rows(sit, cells)
+    out = []
+    for c in np.asarray(cells).tolist():
+        st = sit.cache.get(("sa-tiles", c))
+        if st is None:
+            lo, hi = sit.cache[("tiles", c)][:2]
+            st = np.stack([lo, hi, np.minimum(entr(lo), entr(hi)), np.minimum(entr(1.0 - hi), entr(1.0 - lo))])
+            st.flags.writeable = False
+            sit.cache[("sa-tiles", c)] = st
+        out.append(st)
+    return np.stack(out)
+
+
+def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive) -> np.ndarray:
+    """(K,) an upper bound of the computed G(p) of :func:`space_aware_gain` at every heading of each candidate,
+    from per-tile quantities only: no geodesic distances from the candidate, no entr of its rows, no view.
+
+    G = V_now − (1 − P_f) Σ_h (Z_h/M) V(D_h, H_h − φ_O/ln 2) grows as each V_h falls, and V is non-decreasing in
+    D and H where its argument is positive. Per tile t, with U_t and E_t the tile's sums of u and entr(u) (exact:
+    tile sums of p and entr(p) corrected on the found hypotheses), ℓ_h ∈ [lo_t, hi_t] (hit; [1 − hi_t, 1 − lo_t]
+    for a miss) and d_p ≥ δ_t (:meth:`FreeSpace.tile_distance_floor`):
+    Z_h ∈ [Σ lo_t U_t, Σ hi_t U_t], ℓ·entr(u) + u·entr(ℓ) ≥ T_h = Σ lo_t E_t + Σ U_t min(entr(lo_t), entr(hi_t)),
+    (ℓ ∘ d_p)·u ≥ Σ lo_t U_t δ_t; so H_h = log Z_h + (…)/Z_h ≥ min over the Z interval of log Z + T_h/Z (at
+    Z = T_h clipped to it), D_h ≥ Σ lo_t U_t δ_t / max Z_h, and φ_O ≤ :meth:`FreeSpace.view_bound`. Each
+    weight Z_h/M is taken at the end of its interval that makes the term smallest. Every computed sum differs
+    from its exact value by at most 8 ε (H·W + |found|) times the sum of the magnitudes of its terms (with
+    d_p ≤ 2 (drive + max d_robot) + 1 m): the intervals are widened by that much, and the result by
+    1e-9 (1 + the magnitudes) for the few operations after the sums. Not finite (so never pruned) when a bound
+    fails: a found row with repeated hypotheses, an interval reaching Z ≤ 0 with no entropy floor, …"""
+    space = sit.space
+    cells = np.asarray(cells)
+    k_n, t1 = len(cells), space.n_tiles + 1
+    post, e, a, e_w = sa.post, sa.e, sa.a, sa.e_w
+    sizes = np.array([len(r) for r in rows], dtype=np.int64)
+    idx = np.concatenate(rows).astype(np.int64) if k_n else np.empty(0, np.int64)
+    owner = np.repeat(np.arange(k_n), sizes)
+    simple = np.ones(k_n, bool)  # rows of distinct hypotheses (sorted): u = p (1 − a) on them, p elsewhere
+    if idx.size:
+        repeated = np.zeros(idx.size, bool)
+        repeated[1:] = (idx[1:] <= idx[:-1]) & (owner[1:] == owner[:-1])
+        simple[owner[repeated]] = False
+    at = owner * t1 + space.tile[idx]
+    found_p = np.bincount(at, weights=post[idx], minlength=k_n * t1).reshape(k_n, t1)
+    found_e = np.bincount(at, weights=e[idx], minlength=k_n * t1).reshape(k_n, t1)
+    u_t = np.maximum(space.tile_sums(post)[None, :] - a * found_p, 0.0)  # Σ u per tile (≥ 0 exactly)
+    e_t = np.maximum(space.tile_sums(e)[None, :] - a * found_e + e_w * found_p, 0.0)  # Σ entr(u) per tile
+    st = _space_aware_tiles(sit, cells)
+    floor = np.stack([space.tile_distance_floor(c) for c in cells.tolist()])  # (K, T + 1)
+    lo, hi = st[:, 0], st[:, 1]
+    # rounding of the computed sums: terms of magnitude ≤ p (1 + d) and e + p (2 + e_w), H·W + |found| of them
+    d_max = 2.0 * (np.asarray(drive, dtype=np.float64) + float(np.max(sa.dist_now[np.isfinite(sa.dist_now)]))) + 1.0
+    scale = 2.0 * float(np.abs(post).sum()) * (3.0 + e_w + d_max) + 2.0 * float(e.sum())
+    err = 8.0 * _EPS * (post.size + sizes) * scale
+    mass = post.sum() - a * np.array([post[r].sum() for r in rows])  # as the computed M, exactly
+    norm = np.where(mass > 0, mass, 1.0)
+    phi = (np.zeros(k_n) if sa.gain is None else space.view_bound(sa.gain, cells)) / np.log(2) * (1.0 + 1e-12)
+    total = np.zeros(k_n)
+    magnitude = np.zeros(k_n)
+    for l_lo, l_hi, e_min in ((lo, hi, st[:, 2]), (1.0 - hi, 1.0 - lo, st[:, 3])):  # hit, miss
+        z_lo = (l_lo * u_t).sum(axis=1) - err
+        z_hi = (l_hi * u_t).sum(axis=1) + err
+        t_lo = (l_lo * e_t).sum(axis=1) + (e_min * u_t).sum(axis=1) - err
+        dn_lo = (l_lo * u_t * floor).sum(axis=1) - err
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z_star = np.where(t_lo > 0, np.minimum(np.maximum(t_lo, z_lo), z_hi), z_lo)  # arg min of log Z + t/Z
+            h_lo = np.where(z_star > 0, np.log(np.where(z_star > 0, z_star, 1.0)) + t_lo / np.where(z_star > 0, z_star, 1.0), -np.inf)
+            h_lo = h_lo / np.log(2) - 1e-9 * (1.0 + np.abs(h_lo))
+            d_lo = np.maximum(dn_lo, 0.0) / np.where(z_hi > 0, z_hi, 1.0)
+            arg = (d_lo / sa.ell + 2.0 ** (np.maximum(h_lo - phi - sa.disc_bits, 0.0) - 1.0) - 0.5) * (1.0 - 1e-9)
+            v_lo = np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), -np.inf)
+            term = np.where(v_lo >= 0, np.maximum(z_lo, 0.0) / norm * v_lo, z_hi / norm * v_lo)
+        term = np.where(z_hi <= 0, 0.0, term)  # an outcome of no mass adds nothing
+        total += term
+        magnitude += np.abs(term)
+    with np.errstate(invalid="ignore"):
+        g = sa.v_now - (1.0 - p_f) * total
+        g = g + 1e-9 * (1.0 + abs(sa.v_now) + magnitude)
+    ok = simple & np.isfinite(g) & (p_f <= 1.0) & np.isfinite(phi)
+    return np.where(ok, g, np.inf)
+
+
+def _choose_space_aware(sit: Situation) -> Decision:
+    """The space-aware infotaxis decision, the best-scoring pose of :func:`space_aware_gain`, by branch and bound.
+
+    Every candidate's score has an upper bound: the scoring rule (monotone in G) of the bound of
+    :func:`_space_aware_bound` on the computed G at every heading. The candidates are evaluated exactly —
+    :func:`_space_aware_values`, each candidate's own products, the very numbers of :func:`space_aware_gain` —
+    from the highest bound down, until the next bound is below the best score found; the others cannot win (the
+    bound costs O(tiles) per candidate: no Dijkstra from it, no entr of its rows, no view sectors). The winner is
+    the first maximum in lattice order among the evaluated ones, the candidate :func:`space_aware_gain` would pick.
+    """
+    cells, drive, pred, tau = _candidates(sit)
+    sa = _SpaceAware(sit)
+    p_f, rows = _found_mass(sit, cells)
+    bound = _score(sit, _space_aware_bound(sit, sa, cells, p_f, rows, drive)[:, None], tau).max(axis=1)
+    order = np.argsort(-bound, kind="stable")
+    score = np.full(tau.shape, -np.inf)
+    best = -np.inf
+    for start in range(0, len(order), _CHUNK):
+        k = order[start : start + _CHUNK]
+        k = k[bound[k] >= best]
+        if k.size == 0:
+            break
+        gain = _space_aware_values(sit, sa, cells[k], p_f[k], [rows[i] for i in k.tolist()])
+        score[k] = _score(sit, gain, tau[k])
+        best = max(best, float(score[k].max()))
+    return _best(score, cells, pred, drive, sit)
 
 
 def _towards(sit: Situation, target: int) -> Decision:
@@ -481,6 +614,5 @@ def choose(policy: str, sit: Situation) -> Decision:
     if policy == "infotaxis":
         return _choose_infotaxis(sit)
     if policy == "space-aware-infotaxis":
-        cells, drive, pred, tau = _candidates(sit)
-        return _best(_score(sit, space_aware_gain(sit, cells), tau), cells, pred, drive, sit)
+        return _choose_space_aware(sit)
     raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")
