@@ -391,9 +391,10 @@ class _SpaceAware:
             return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
 
 
-def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows) -> np.ndarray:
-    """:func:`space_aware_gain` of ``cells`` with their P_f and found hypotheses (:func:`_found_mass`): each
-    candidate's own products and the same element-wise operations, whichever other candidates come with it."""
+def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows, phi_o_bits=None) -> np.ndarray:
+    """:func:`space_aware_gain` of ``cells`` with their P_f and found hypotheses (:func:`_found_mass`) and, if
+    computed already, their φ_O in bits (:func:`_view_bits`): each candidate's own products and the same
+    element-wise operations, whichever other candidates come with it."""
     post, e, pe, a, e_w = sa.post, sa.e, sa.pe, sa.a, sa.e_w
     k_n = len(cells)
     dense = np.empty((k_n, 6))  # per candidate: L·p, L·e, H_b·p, entr(L)·p, (L∘d)·p, d·p  (L = P(hit), e = entr(p))
@@ -420,10 +421,8 @@ def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows) -> np
     d_all = times_u(5)
     outcomes = ((z_hit, l_ent_u + u_e_hit, d_hit),  # hit
                 (mass - z_hit, (ent_u - l_ent_u) + (u_e_bin - u_e_hit), d_all - d_hit))  # miss
-    if sa.gain is None:
-        phi_o_bits = np.zeros((k_n, len(sit.space.headings))) / np.log(2)  # (K, n_h)
-    else:
-        phi_o_bits = sit.space.view_gain(sa.gain, cells) / np.log(2)
+    if phi_o_bits is None:
+        phi_o_bits = _view_bits(sit, sa, cells)  # (K, n_h)
     expected = np.zeros((k_n, len(sit.space.headings)))
     norm = np.where(mass > 0, mass, 1.0)
     for z, t, d in outcomes:
@@ -433,6 +432,13 @@ def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows) -> np
         d_h = np.where(pos, d / zz, 0.0)
         expected += (np.where(pos, z, 0.0) / norm)[:, None] * sa.value(d_h[:, None], h_bits[:, None] - phi_o_bits)
     return sa.v_now - (1.0 - p_f[:, None]) * expected
+
+
+def _view_bits(sit: Situation, sa: _SpaceAware, cells) -> np.ndarray:
+    """φ_O / ln 2 for every candidate × heading (zeros for the olfaction variant), row by row."""
+    if sa.gain is None:
+        return np.zeros((len(cells), len(sit.space.headings))) / np.log(2)
+    return sit.space.view_gain(sa.gain, cells) / np.log(2)
 
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -455,22 +461,25 @@ def _space_aware_tiles(sit: Situation, cells) -> np.ndarray:
     return np.stack(out)
 
 
-def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive) -> np.ndarray:
-    """(K,) an upper bound of the computed G(p) of :func:`space_aware_gain` at every heading of each candidate,
-    from per-tile quantities only: no geodesic distances from the candidate, no entr of its rows, no view.
+def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive, phi_o_bits) -> np.ndarray:
+    """(K, n_headings) an upper bound of the computed G(p) of :func:`space_aware_gain` of each candidate pose,
+    without the costly parts of its exact value: no geodesic distances from the candidate (a Dijkstra each), no
+    entr of its rows.
 
     G = V_now − (1 − P_f) Σ_h (Z_h/M) V(D_h, H_h − φ_O/ln 2) grows as each V_h falls, and V is non-decreasing in
-    D and H where its argument is positive. Per tile t, with U_t and E_t the tile's sums of u and entr(u) (exact:
-    tile sums of p and entr(p) corrected on the found hypotheses), ℓ_h ∈ [lo_t, hi_t] (hit; [1 − hi_t, 1 − lo_t]
-    for a miss) and d_p ≥ δ_t (:meth:`FreeSpace.tile_distance_floor`):
-    Z_h ∈ [Σ lo_t U_t, Σ hi_t U_t], ℓ·entr(u) + u·entr(ℓ) ≥ T_h = Σ lo_t E_t + Σ U_t min(entr(lo_t), entr(hi_t)),
-    (ℓ ∘ d_p)·u ≥ Σ lo_t U_t δ_t; so H_h = log Z_h + (…)/Z_h ≥ min over the Z interval of log Z + T_h/Z (at
-    Z = T_h clipped to it), D_h ≥ Σ lo_t U_t δ_t / max Z_h, and φ_O ≤ :meth:`FreeSpace.view_bound`. Each
-    weight Z_h/M is taken at the end of its interval that makes the term smallest. Every computed sum differs
-    from its exact value by at most 8 ε (H·W + |found|) times the sum of the magnitudes of its terms (with
-    d_p ≤ 2 (drive + max d_robot) + 1 m): the intervals are widened by that much, and the result by
-    1e-9 (1 + the magnitudes) for the few operations after the sums. Not finite (so never pruned) when a bound
-    fails: a found row with repeated hypotheses, an interval reaching Z ≤ 0 with no entropy floor, …"""
+    D and H where its argument is positive. Computed for each candidate (one product of its row with p and
+    entr(p), as in :func:`space_aware_gain`): Z_h and the part ℓ_h·entr(u) of the entropy's numerator; φ_O is
+    given. Bounded per tile t, with U_t the tile's sum of u (tile sums of p corrected on the found hypotheses),
+    ℓ_h ∈ [lo_t, hi_t] on it (hit; [1 − hi_t, 1 − lo_t] for a miss) and d_p ≥ δ_t
+    (:meth:`FreeSpace.tile_distance_floor`): u·entr(ℓ_h) ≥ Σ U_t min(entr(lo_t), entr(hi_t)) (entr is concave),
+    and (ℓ_h ∘ d_p)·u = Σ_t W_t d̄_t with W_t = Σ_{s ∈ t} ℓ_h u ∈ [lo_t U_t, hi_t U_t], Σ W_t = Z_h, d̄_t ≥ δ_t: at
+    least the least Σ W_t δ_t under those constraints (the mass above the lower ends poured into the tiles
+    nearest first). Every computed sum differs from its exact value by at most err = 8 ε (H·W + |found|) times
+    the sum of the magnitudes of its terms (d_p ≤ 2 (drive + max d_robot) + 1 m); the intervals are widened by a
+    few err, H is taken at its least over the interval of Z, each weight Z_h/M at the end of its interval that
+    makes the term smallest, and the result raised by 1e-9 (1 + the magnitudes) for the operations after the
+    sums. Not finite (so never pruned) when a bound fails: a found row with repeated hypotheses, P_f > 1, an
+    argument of V that may be ≤ 0, …"""
     space = sit.space
     cells = np.asarray(cells)
     k_n, t1 = len(cells), space.n_tiles + 1
@@ -483,60 +492,78 @@ def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive)
         repeated = np.zeros(idx.size, bool)
         repeated[1:] = (idx[1:] <= idx[:-1]) & (owner[1:] == owner[:-1])
         simple[owner[repeated]] = False
-    at = owner * t1 + space.tile[idx]
-    found_p = np.bincount(at, weights=post[idx], minlength=k_n * t1).reshape(k_n, t1)
-    found_e = np.bincount(at, weights=e[idx], minlength=k_n * t1).reshape(k_n, t1)
+    found_p = np.bincount(owner * t1 + space.tile[idx], weights=post[idx], minlength=k_n * t1).reshape(k_n, t1)
     u_t = np.maximum(space.tile_sums(post)[None, :] - a * found_p, 0.0)  # Σ u per tile (≥ 0 exactly)
-    e_t = np.maximum(space.tile_sums(e)[None, :] - a * found_e + e_w * found_p, 0.0)  # Σ entr(u) per tile
     st = _space_aware_tiles(sit, cells)
-    floor = np.stack([space.tile_distance_floor(c) for c in cells.tolist()])  # (K, T + 1)
     lo, hi = st[:, 0], st[:, 1]
+    # per candidate: ℓ·p, ℓ·e over the map and over the found hypotheses, Σp and Σe there
+    sums = np.empty((k_n, 6))
+    for k, (row, found) in enumerate(zip(_hit_rows(sit, cells), rows)):  # candidates (tens): one product each
+        p_m, e_m, l_m = post[found], e[found], row[found]
+        sums[k, :2] = row @ sa.pe
+        sums[k, 2:] = (l_m @ p_m, l_m @ e_m, p_m.sum(), e_m.sum())
+    mass = post.sum() - a * sums[:, 4]  # as the computed M, exactly
+    norm = np.where(mass > 0, mass, 1.0)
+    z_hit = sums[:, 0] - a * sums[:, 2]
+    a_hit = sums[:, 1] - a * sums[:, 3] + e_w * sums[:, 2]  # ℓ_hit · entr(u)
+    a_all = (e.sum() - a * sums[:, 5]) + e_w * sums[:, 4]  # Σ entr(u)
     # rounding of the computed sums: terms of magnitude ≤ p (1 + d) and e + p (2 + e_w), H·W + |found| of them
     d_max = 2.0 * (np.asarray(drive, dtype=np.float64) + float(np.max(sa.dist_now[np.isfinite(sa.dist_now)]))) + 1.0
     scale = 2.0 * float(np.abs(post).sum()) * (3.0 + e_w + d_max) + 2.0 * float(e.sum())
     err = 8.0 * _EPS * (post.size + sizes) * scale
-    mass = post.sum() - a * np.array([post[r].sum() for r in rows])  # as the computed M, exactly
-    norm = np.where(mass > 0, mass, 1.0)
-    phi = (np.zeros(k_n) if sa.gain is None else space.view_bound(sa.gain, cells)) / np.log(2) * (1.0 + 1e-12)
-    total = np.zeros(k_n)
+    floors = [space.tile_distance_floor(c) for c in cells.tolist()]
+    delta = np.stack([f[0] for f in floors])  # (K, T + 1)
+    near_first = np.stack([f[1] for f in floors])  # tiles by δ, ascending
+    delta_sorted = np.take_along_axis(delta, near_first, axis=1)
+    total = np.zeros((k_n, phi_o_bits.shape[1]))
     magnitude = np.zeros(k_n)
-    for l_lo, l_hi, e_min in ((lo, hi, st[:, 2]), (1.0 - hi, 1.0 - lo, st[:, 3])):  # hit, miss
-        z_lo = (l_lo * u_t).sum(axis=1) - err
-        z_hi = (l_hi * u_t).sum(axis=1) + err
-        t_lo = (l_lo * e_t).sum(axis=1) + (e_min * u_t).sum(axis=1) - err
-        dn_lo = (l_lo * u_t * floor).sum(axis=1) - err
-        with np.errstate(divide="ignore", invalid="ignore"):
+    outcomes = ((lo, hi, st[:, 2], z_hit, a_hit, 4.0 * err),  # hit
+                (1.0 - hi, 1.0 - lo, st[:, 3], mass - z_hit, a_all - a_hit, 8.0 * err))  # miss
+    for l_lo, l_hi, e_min, z, t_known, slack in outcomes:
+        z_lo, z_hi = z - slack, z + slack
+        t_lo = t_known - slack + (e_min * u_t).sum(axis=1) - err
+        w_lo = l_lo * u_t
+        base = (w_lo * delta).sum(axis=1)
+        caps = np.take_along_axis((l_hi - l_lo) * u_t, near_first, axis=1)
+        before = np.cumsum(caps, axis=1) - caps
+        poured = np.clip((z_lo - w_lo.sum(axis=1))[:, None] - before, 0.0, caps)
+        dn_lo = base + (poured * delta_sorted).sum(axis=1) - err
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             z_star = np.where(t_lo > 0, np.minimum(np.maximum(t_lo, z_lo), z_hi), z_lo)  # arg min of log Z + t/Z
-            h_lo = np.where(z_star > 0, np.log(np.where(z_star > 0, z_star, 1.0)) + t_lo / np.where(z_star > 0, z_star, 1.0), -np.inf)
+            safe = np.where(z_star > 0, z_star, 1.0)
+            h_lo = np.where(z_star > 0, np.log(safe) + t_lo / safe, -np.inf)
             h_lo = h_lo / np.log(2) - 1e-9 * (1.0 + np.abs(h_lo))
             d_lo = np.maximum(dn_lo, 0.0) / np.where(z_hi > 0, z_hi, 1.0)
-            arg = (d_lo / sa.ell + 2.0 ** (np.maximum(h_lo - phi - sa.disc_bits, 0.0) - 1.0) - 0.5) * (1.0 - 1e-9)
+            h_eff = np.maximum(h_lo[:, None] - phi_o_bits * (1.0 + 1e-12) - 1e-12 - sa.disc_bits, 0.0)
+            arg = (d_lo[:, None] / sa.ell + 2.0 ** (h_eff - 1.0) - 0.5) * (1.0 - 1e-9)
             v_lo = np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), -np.inf)
-            term = np.where(v_lo >= 0, np.maximum(z_lo, 0.0) / norm * v_lo, z_hi / norm * v_lo)
-        term = np.where(z_hi <= 0, 0.0, term)  # an outcome of no mass adds nothing
+            term = np.where(v_lo >= 0, (np.maximum(z_lo, 0.0) / norm)[:, None] * v_lo, (z_hi / norm)[:, None] * v_lo)
+        term = np.where((z_hi <= 0)[:, None], 0.0, term)  # an outcome of no mass adds nothing
         total += term
-        magnitude += np.abs(term)
+        magnitude += np.abs(term).max(axis=1)
     with np.errstate(invalid="ignore"):
-        g = sa.v_now - (1.0 - p_f) * total
-        g = g + 1e-9 * (1.0 + abs(sa.v_now) + magnitude)
-    ok = simple & np.isfinite(g) & (p_f <= 1.0) & np.isfinite(phi)
-    return np.where(ok, g, np.inf)
+        g = sa.v_now - (1.0 - p_f[:, None]) * total
+        g = g + (1e-9 * (1.0 + abs(sa.v_now) + magnitude))[:, None]
+    ok = simple & (p_f <= 1.0) & np.isfinite(phi_o_bits).all(axis=1)
+    return np.where(ok[:, None] & np.isfinite(g), g, np.inf)
 
 
 def _choose_space_aware(sit: Situation) -> Decision:
     """The space-aware infotaxis decision, the best-scoring pose of :func:`space_aware_gain`, by branch and bound.
 
-    Every candidate's score has an upper bound: the scoring rule (monotone in G) of the bound of
-    :func:`_space_aware_bound` on the computed G at every heading. The candidates are evaluated exactly —
+    Every candidate pose's score has an upper bound: the scoring rule (monotone in G) of the bound of
+    :func:`_space_aware_bound` on its computed G; a candidate's bound is the largest over its headings. The candidates are evaluated exactly —
     :func:`_space_aware_values`, each candidate's own products, the very numbers of :func:`space_aware_gain` —
     from the highest bound down, until the next bound is below the best score found; the others cannot win (the
-    bound costs O(tiles) per candidate: no Dijkstra from it, no entr of its rows, no view sectors). The winner is
+    bound costs one product of its row and O(tiles) per candidate: no Dijkstra from it, no entr of its rows). The
+    winner is
     the first maximum in lattice order among the evaluated ones, the candidate :func:`space_aware_gain` would pick.
     """
     cells, drive, pred, tau = _candidates(sit)
     sa = _SpaceAware(sit)
     p_f, rows = _found_mass(sit, cells)
-    bound = _score(sit, _space_aware_bound(sit, sa, cells, p_f, rows, drive)[:, None], tau).max(axis=1)
+    phi = _view_bits(sit, sa, cells)  # exact (the views are cached per position), used by both
+    bound = _score(sit, _space_aware_bound(sit, sa, cells, p_f, rows, drive, phi), tau).max(axis=1)
     order = np.argsort(-bound, kind="stable")
     score = np.full(tau.shape, -np.inf)
     best = -np.inf
@@ -545,7 +572,7 @@ def _choose_space_aware(sit: Situation) -> Decision:
         k = k[bound[k] >= best]
         if k.size == 0:
             break
-        gain = _space_aware_values(sit, sa, cells[k], p_f[k], [rows[i] for i in k.tolist()])
+        gain = _space_aware_values(sit, sa, cells[k], p_f[k], [rows[i] for i in k.tolist()], phi[k])
         score[k] = _score(sit, gain, tau[k])
         best = max(best, float(score[k].max()))
     return _best(score, cells, pred, drive, sit)

@@ -159,11 +159,18 @@ class FreeSpace:
             self._dist_cache.move_to_end(cell)
         return d
 
-    def tile_distance_floor(self, cell: int) -> np.ndarray:
-        """(T + 1,) a lower bound of the finite geodesic distances from navigable ``cell`` over each tile (cached).
+    def tile_distance_floor(self, cell: int):
+        """A lower bound of the finite geodesic distances from navigable ``cell`` over each tile (cached).
 
-        Entry t ≤ min over the free cells s of tile t of d(s) = :meth:`distances` (``cell``)[s], taken as 0 where
-        it is infinite (the convention of the policies); entry T (every cell that is not free) is 0. On the graph
+        Returns
+        -------
+        floor : (T + 1,) ndarray
+            Entry t ≤ the least distance to a free cell of tile t, entry T = 0 (below).
+        order : (T + 1,) ndarray of int
+            The tiles sorted by ``floor``, ascending (stable).
+
+        floor[t] ≤ min over the free cells s of tile t of d(s) = :meth:`distances` (``cell``)[s], taken as 0 where
+        it is infinite (the convention of the policies); floor[T] (every cell that is not free) is 0. On the graph
         (8 neighbours, edges of h and h√2 m, no corner cutting) a path from ``cell`` to the navigable cell n(s)
         is at least the octile distance h (max(Δr, Δc) + (√2 − 1) min(Δr, Δc)); then d(s) ≥ octile + offset(s).
         Times 1 − 1e-9, far below the relative rounding of a Dijkstra sum over fewer than 10⁶ edges (≤ 1e-10).
@@ -182,9 +189,11 @@ class FreeSpace:
             octile = self.resolution * (np.maximum(dr, dc) + (np.sqrt(2.0) - 1.0) * np.minimum(dr, dc))
             low = (octile + self._offset) * (1.0 - 1e-9)
             low[self._component[self._nearest_nav] != self._component[cell]] = 0.0  # unreachable: d taken as 0
-            hit = np.zeros(self.n_tiles + 1)
-            hit[:-1] = np.minimum.reduceat(low[self._tile_order], self._tile_starts)
-            hit.flags.writeable = False
+            floor = np.zeros(self.n_tiles + 1)
+            floor[:-1] = np.minimum.reduceat(low[self._tile_order], self._tile_starts)
+            hit = (floor, np.argsort(floor, kind="stable"))
+            for v in hit:
+                v.flags.writeable = False
             self._discs[key] = hit
         return hit
 
