@@ -50,7 +50,10 @@ moves (:meth:`FreeSpace.candidates`).
   out. G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
   those of p(s | h, F̄) ∝ p(s) w_p(s) P(h | s) (:func:`space_aware_gain` computes them from cached rows without
   forming that belief); the semantic extension subtracts the view's expected information φ_O(p)/ln 2 bits from
-  H_h.
+  H_h. Decided by exact branch and bound (:func:`_choose_space_aware`): a rigorous per-tile upper bound of every
+  pose's score, then the exact score of the few poses whose bound reaches the best one, the same arg max as
+  scoring every pose; the bound needs no geodesic distances from the pose (a Dijkstra each), which dominated the
+  decisions in large homes.
 * ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
   the MAP cell, with the camera towards it.
 * ``semantic-modes`` — semantics alone, no gas: drive towards the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s),
@@ -461,6 +464,24 @@ def _space_aware_tiles(sit: Situation, cells) -> np.ndarray:
     return np.stack(out)
 
 
+def _space_aware_stack(sit: Situation, cells):
+    """(K, 4, T + 1) :func:`_space_aware_tiles` and, per candidate, the tiles' distance floors δ, the tiles sorted
+    by δ and δ in that order ((K, T + 1) each, :meth:`FreeSpace.tile_distance_floor`), kept in the run cache for
+    the last candidate set only (a decision repeated at the same cell; emptied with the rows when the plume model
+    changes)."""
+    _hit_rows(sit, cells)  # first: empties the cache if the plume model changed
+    key = (int(sit.cell), float(sit.horizon), sit.far_spacing)
+    hit = sit.cache.get("sa-stack")
+    if hit is not None and hit[0] == key and np.array_equal(hit[1], cells):
+        return hit[2:]
+    floors = [sit.space.tile_distance_floor(c) for c in np.asarray(cells).tolist()]
+    delta = np.stack([f[0] for f in floors])
+    near_first = np.stack([f[1] for f in floors])
+    out = (_space_aware_tiles(sit, cells), delta, near_first, np.take_along_axis(delta, near_first, axis=1))
+    sit.cache["sa-stack"] = (key, np.array(cells)) + out
+    return out
+
+
 def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive, phi_o_bits) -> np.ndarray:
     """(K, n_headings) an upper bound of the computed G(p) of :func:`space_aware_gain` of each candidate pose,
     without the costly parts of its exact value: no geodesic distances from the candidate (a Dijkstra each), no
@@ -494,7 +515,7 @@ def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive,
         simple[owner[repeated]] = False
     found_p = np.bincount(owner * t1 + space.tile[idx], weights=post[idx], minlength=k_n * t1).reshape(k_n, t1)
     u_t = np.maximum(space.tile_sums(post)[None, :] - a * found_p, 0.0)  # Σ u per tile (≥ 0 exactly)
-    st = _space_aware_tiles(sit, cells)
+    st, delta, near_first, delta_sorted = _space_aware_stack(sit, cells)
     lo, hi = st[:, 0], st[:, 1]
     # per candidate: ℓ·p, ℓ·e over the map and over the found hypotheses, Σp and Σe there
     sums = np.empty((k_n, 6))
@@ -511,23 +532,23 @@ def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive,
     d_max = 2.0 * (np.asarray(drive, dtype=np.float64) + float(np.max(sa.dist_now[np.isfinite(sa.dist_now)]))) + 1.0
     scale = 2.0 * float(np.abs(post).sum()) * (3.0 + e_w + d_max) + 2.0 * float(e.sum())
     err = 8.0 * _EPS * (post.size + sizes) * scale
-    floors = [space.tile_distance_floor(c) for c in cells.tolist()]
-    delta = np.stack([f[0] for f in floors])  # (K, T + 1)
-    near_first = np.stack([f[1] for f in floors])  # tiles by δ, ascending
-    delta_sorted = np.take_along_axis(delta, near_first, axis=1)
+    # per tile: the lower ends of W_t (hit: lo U, miss: U − hi U) and the room above them, (hi − lo) U, for both
+    lo_u, hi_u = lo * u_t, hi * u_t
+    u_delta = np.einsum("kt,kt->k", u_t, delta)
+    caps = np.take_along_axis(hi_u - lo_u, near_first, axis=1)
+    before = np.cumsum(caps, axis=1)
+    before -= caps
     total = np.zeros((k_n, phi_o_bits.shape[1]))
     magnitude = np.zeros(k_n)
-    outcomes = ((lo, hi, st[:, 2], z_hit, a_hit, 4.0 * err),  # hit
-                (1.0 - hi, 1.0 - lo, st[:, 3], mass - z_hit, a_all - a_hit, 8.0 * err))  # miss
-    for l_lo, l_hi, e_min, z, t_known, slack in outcomes:
+    outcomes = ((lo_u.sum(axis=1), np.einsum("kt,kt->k", lo_u, delta), np.einsum("kt,kt->k", st[:, 2], u_t),
+                 z_hit, a_hit, 4.0 * err),  # hit
+                (u_t.sum(axis=1) - hi_u.sum(axis=1), u_delta - np.einsum("kt,kt->k", hi_u, delta),
+                 np.einsum("kt,kt->k", st[:, 3], u_t), mass - z_hit, a_all - a_hit, 8.0 * err))  # miss
+    for w_lo, base, e_min_u, z, t_known, slack in outcomes:
         z_lo, z_hi = z - slack, z + slack
-        t_lo = t_known - slack + (e_min * u_t).sum(axis=1) - err
-        w_lo = l_lo * u_t
-        base = (w_lo * delta).sum(axis=1)
-        caps = np.take_along_axis((l_hi - l_lo) * u_t, near_first, axis=1)
-        before = np.cumsum(caps, axis=1) - caps
-        poured = np.clip((z_lo - w_lo.sum(axis=1))[:, None] - before, 0.0, caps)
-        dn_lo = base + (poured * delta_sorted).sum(axis=1) - err
+        t_lo = t_known - slack + e_min_u - err
+        poured = np.clip((z_lo - w_lo)[:, None] - before, 0.0, caps)
+        dn_lo = base + np.einsum("kt,kt->k", poured, delta_sorted) - err
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             z_star = np.where(t_lo > 0, np.minimum(np.maximum(t_lo, z_lo), z_hi), z_lo)  # arg min of log Z + t/Z
             safe = np.where(z_star > 0, z_star, 1.0)
