@@ -21,8 +21,8 @@ process (not a test).
   :func:`psgsl_pgm.sim.generate_house`, the homes of ``psgsl benchmark``): per home, one decision for
   ``semantics+rooms`` after the first stop with warm caches (best of ``--repeats``) and cold (a fresh
   :class:`FreeSpace` and run cache: Green's rows, geodesic distances and views all computed; best of 3), and the
-  decisions of a seeded ``--home-budget``-s episode (never found): their mean and total, the share of the
-  decisions in the cost of a benchmark episode. The same for the embedded house.
+  decisions of a seeded ``--home-budget``-s episode (never found; the first in its home: no views kept from
+  another run): their mean and total, the share of the decisions in the cost of a benchmark episode. The same for the embedded house.
 
 One core: run it as ``taskset -c 0 python benchmarks/bench_search.py``; the BLAS is limited to one thread here
 (threadpoolctl), as in the grid's workers. Run: ``python benchmarks/bench_search.py [--repeats 20]
@@ -175,7 +175,7 @@ def _space_aware_homes(a):
     """Space-aware infotaxis decisions in the embedded house and in large generated homes (module docstring)."""
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors, visit
-    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, run_closed_loop
+    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, _space, run_closed_loop
     from psgsl_pgm.search._policies import choose
     from psgsl_pgm.sim import default_world
     from psgsl_pgm.sim._generate import generate_house
@@ -207,6 +207,7 @@ def _space_aware_homes(a):
 
         colds = []
         for _ in range(3):  # cold: a fresh geometry (Dijkstra, views) and run cache (Green's rows), best of 3
+            _space._SHARED_VIEWS.clear()  # the views a process keeps per map
             sit = situation(FreeSpace(world.house, world.camera), {})
             t0 = time.perf_counter()
             choose("space-aware-infotaxis", sit)
@@ -228,6 +229,7 @@ def _space_aware_homes(a):
 
         saved = _loop.choose
         _loop.choose = timed
+        _space._SHARED_VIEWS.clear()  # the first episode in this home
         try:
             t0 = time.perf_counter()
             run_closed_loop(source, 0, "space-aware-infotaxis", "semantics+rooms",

@@ -14,6 +14,7 @@ same for every seed), and is split into the heading sectors by the same cone tes
 
 from __future__ import annotations
 
+import hashlib
 from collections import OrderedDict, deque
 
 import numpy as np
@@ -26,6 +27,22 @@ from ..geometry._grid import free_space_graph
 __all__ = ["FreeSpace"]
 
 _TILE = 5  # cells per side of the tiles of FreeSpace.view_bound
+
+#: Per-position views shared by every FreeSpace of the same map, free cells, camera and headings in the process
+#: (each run of a grid builds its own FreeSpace; walls do not move): at most four maps, least recently used dropped.
+_SHARED_VIEWS: OrderedDict = OrderedDict()
+_SHARED_VIEWS_MAX = 4
+
+
+def _shared_views(key) -> dict:
+    hit = _SHARED_VIEWS.get(key)
+    if hit is None:
+        hit = _SHARED_VIEWS[key] = {}
+        if len(_SHARED_VIEWS) > _SHARED_VIEWS_MAX:
+            _SHARED_VIEWS.popitem(last=False)
+    else:
+        _SHARED_VIEWS.move_to_end(key)
+    return hit
 
 
 
@@ -98,7 +115,13 @@ class FreeSpace:
         self._tile_starts = np.searchsorted(self.tile[self._tile_order], np.arange(self.n_tiles))
         self._sight = ViewCache.shared(grid.occupancy, max_range=camera.max_range, half_angle=camera.half_angle,
                                        min_range=camera.min_range, resolution=grid.resolution, origin=grid.origin)
-        self._views: dict = {}  # cell -> (flat cells, (n_headings, m) bool sectors)
+        # cell -> (flat cells, (n_headings, m) bool sectors): what they depend on names the shared dict
+        digest = hashlib.sha1(np.ascontiguousarray(grid.occupancy).tobytes())
+        digest.update(np.ascontiguousarray(self.free).tobytes())
+        self._views: dict = _shared_views((digest.hexdigest(), self.nav.shape, self.resolution,
+                                           tuple(np.asarray(grid.origin, dtype=np.float64).ravel().tolist()),
+                                           float(camera.max_range), float(camera.half_angle),
+                                           float(camera.min_range), self.headings.tobytes()))
         self._component = None  # connected component of every cell in the graph (computed on first use)
 
     # --- cells and positions ------------------------------------------------------------------------------

@@ -111,3 +111,22 @@ def test_tile_distance_floor_is_below_every_geodesic_distance_of_its_tile():
         assert (floor <= exact).all()
         tight.append(np.median(floor[:-1][exact[:-1] > 0] / exact[:-1][exact[:-1] > 0]))
     assert min(tight) > 0.7  # the octile floor is not a trivial one
+
+
+def test_views_are_shared_by_the_free_spaces_of_one_map_and_camera():
+    from psgsl_pgm.search import FreeSpace
+    from psgsl_pgm.sim import Camera, generate_house
+
+    house = generate_house(104, area=60.0).house
+    a, b = FreeSpace(house, Camera()), FreeSpace(house, Camera())
+    narrow = FreeSpace(house, Camera(half_angle=0.3))
+    other = FreeSpace(house, Camera(), n_headings=4)
+    cell = int(np.flatnonzero(a.nav.ravel())[len(np.flatnonzero(a.nav.ravel())) // 2])
+    flat, sectors = a.view(cell)
+    assert b.view(cell)[0] is flat and b.view(cell)[1] is sectors  # computed once for both
+    assert narrow.view(cell)[1].sum() < sectors.sum()  # another camera: its own views
+    assert other.view(cell)[1].shape == (4, flat.size)
+    fresh = FreeSpace.__new__(FreeSpace)
+    fresh.__dict__.update(a.__dict__, _views={})  # the same geometry, nothing cached
+    np.testing.assert_array_equal(fresh.view(cell)[0], flat)
+    np.testing.assert_array_equal(fresh.view(cell)[1], sectors)
