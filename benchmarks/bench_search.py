@@ -20,12 +20,19 @@ process (not a test).
   not one of the generator's reference seeds): the same never-found 1000-s ``infotaxis/semantics+rooms``
   episode, and the ``tour`` policy's, each with its split;
 * the first-call cost: a short episode in a fresh process with an empty numba cache (compiling every kernel
-  it calls) and again with the cache filled (loading them).
+  it calls) and again with the cache filled (loading them);
+* space-aware infotaxis in large generated homes (``--homes 101,102,103``, ``--home-area`` m², of
+  :func:`psgsl_pgm.sim.generate_house`, the homes of ``psgsl benchmark``): per home, one decision for
+  ``semantics+rooms`` after the first stop with warm caches (best of ``--repeats``) and cold (a fresh
+  :class:`FreeSpace` and run cache: Green's rows, geodesic distances and views all computed; best of 3), and the
+  decisions of a seeded ``--home-budget``-s episode (never found; the first in its home: no views kept from
+  another run): their mean and total, the share of the decisions in the cost of a benchmark episode. The same for the embedded house.
 
 Every episode row also gives the process CPU time (best of the runs), the measure that stays meaningful on a
 shared machine. One core: run it as ``taskset -c 0 python benchmarks/bench_search.py``; the BLAS is limited to
 one thread here (threadpoolctl), as in the grid's workers. Run: ``python benchmarks/bench_search.py
-[--repeats 20] [--episodes 5] [--house {embedded,large}] [--no-episode] [--no-compile]`` on an otherwise idle core.
+[--repeats 20] [--episodes 5] [--house {embedded,large}] [--no-episode] [--no-compile] [--homes 101,102,103]
+[--home-area 190] [--home-budget 300] [--only-homes]`` on an otherwise idle core (``--homes ''`` skips the homes).
 """
 
 from __future__ import annotations
@@ -110,6 +117,10 @@ def main(argv=None):
                     help="the episode rows' home: the embedded house or a large generated one")
     ap.add_argument("--no-episode", action="store_true")
     ap.add_argument("--no-compile", action="store_true")
+    ap.add_argument("--homes", default="101,102,103", help="generated homes (seeds, comma-separated; '' for none)")
+    ap.add_argument("--home-area", type=float, default=190.0)
+    ap.add_argument("--home-budget", type=float, default=300.0)
+    ap.add_argument("--only-homes", action="store_true", help="skip everything but the homes' space-aware lines")
     a = ap.parse_args(argv)
     try:
         from threadpoolctl import threadpool_limits
@@ -118,6 +129,9 @@ def main(argv=None):
     except ImportError:
         print("threadpoolctl not installed: the BLAS may use several threads")
 
+    if a.only_homes:
+        _space_aware_homes(a)
+        return
     from psgsl_pgm import semantic_source_probability
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors, visit
@@ -183,6 +197,80 @@ def main(argv=None):
                                                text=True).stdout.split()[-1]) for _ in range(2))
         print(f"first call, a 20-s episode in a fresh process: {cold:.1f} s with an empty numba cache (compiling), "
               f"{warm:.1f} s with it filled: {cold - warm:.1f} s of compilation")
+    _space_aware_homes(a)
+
+
+def _space_aware_homes(a):
+    """Space-aware infotaxis decisions in the embedded house and in large generated homes (module docstring)."""
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.experiment._step import VariantPosteriors, visit
+    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, _space, run_closed_loop
+    from psgsl_pgm.search._policies import choose
+    from psgsl_pgm.sim import default_world
+    from psgsl_pgm.sim._generate import generate_house
+
+    config, defaults = ExperimentConfig(), SearchConfig()
+    homes = [int(h) for h in a.homes.split(",") if h.strip()]
+    for home in [None] + homes:
+        if home is None:
+            spec, source, name = default_world(), "oven", "embedded house"
+        else:
+            g = generate_house(home, area=a.home_area)
+            spec = g.world()
+            objects = list(g.house.objects)
+            source = tuple(float(v) for v in objects[len(objects) // 2].center)  # a fixed object of the home
+            name = f"home {home} ({g.area:.0f} m², {g.n_rooms} rooms)"
+        world = spec.make_world(0, source, warm_up=config.warm_up)
+
+        def situation(space, cache):
+            beliefs = VariantPosteriors(world, "infotaxis", config, setting=spec, variants=("semantics+rooms",))
+            cell = space.snap(spec.start_for(world.house))
+            stop = space.position(cell)
+            reading, wind, frames = visit(world, stop, (0.0, np.pi / 2, np.pi, 1.5 * np.pi), config)
+            beliefs.observe(stop, reading, wind, frames)
+            post = beliefs.posteriors(("semantics+rooms",))[0]
+            detection = DetectionModel.from_house(world.house, defaults.found_radius)
+            return Situation(post, beliefs, "semantics+rooms", space, cell, 0.0, config.speed, config.turn_time,
+                             world.gas_sensor.window, defaults.horizon, defaults.found_radius, cache, defaults.score,
+                             detection, defaults.far_spacing)
+
+        colds = []
+        for _ in range(3):  # cold: a fresh geometry (Dijkstra, views) and run cache (Green's rows), best of 3
+            _space._SHARED_VIEWS.clear()  # the views a process keeps per map
+            sit = situation(FreeSpace(world.house, world.camera), {})
+            t0 = time.perf_counter()
+            choose("space-aware-infotaxis", sit)
+            colds.append(1e3 * (time.perf_counter() - t0))
+        n_cand = len(sit.space.candidates(sit.cell, sit.horizon, sit.far_spacing)[0])
+        warm = []
+        for _ in range(max(1, a.repeats)):
+            t0 = time.perf_counter()
+            choose("space-aware-infotaxis", sit)
+            warm.append(1e3 * (time.perf_counter() - t0))
+        spent = []
+
+        def timed(policy, s):
+            t0 = time.perf_counter()
+            try:
+                return choose(policy, s)
+            finally:
+                spent.append(time.perf_counter() - t0)
+
+        saved = _loop.choose
+        _loop.choose = timed
+        _space._SHARED_VIEWS.clear()  # the first episode in this home
+        try:
+            t0 = time.perf_counter()
+            run_closed_loop(source, 0, "space-aware-infotaxis", "semantics+rooms",
+                            world_spec=None if home is None else spec,
+                            search=SearchConfig(found_radius=1e-3, time_budget=a.home_budget))
+            wall = time.perf_counter() - t0
+        finally:
+            _loop.choose = saved
+        print(f"space-aware, {name}, grid {world.house.shape}, {n_cand} candidate positions: decision warm "
+              f"{min(warm):.2f} ms (best of {len(warm)}), cold {min(colds):.0f} ms (best of 3); a {a.home_budget:.0f}-s "
+              f"episode: {len(spent)} decisions, mean {1e3 * np.mean(spent):.1f} ms, {sum(spent):.2f} s of its "
+              f"{wall:.2f} s ({sum(spent) / wall:.0%})")
 
 
 if __name__ == "__main__":

@@ -52,7 +52,10 @@ moves (:meth:`FreeSpace.candidates`).
   out. G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
   those of p(s | h, F̄) ∝ p(s) w_p(s) P(h | s) (:func:`space_aware_gain` computes them from cached rows without
   forming that belief); the semantic extension subtracts the view's expected information φ_O(p)/ln 2 bits from
-  H_h.
+  H_h. Decided by exact branch and bound (:func:`_choose_space_aware`): a rigorous per-tile upper bound of every
+  pose's score, then the exact score of the few poses whose bound reaches the best one, the same arg max as
+  scoring every pose; the bound needs no geodesic distances from the pose (a Dijkstra each), which dominated the
+  decisions in large homes.
 * ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
   the MAP cell, with the camera towards it.
 * ``semantic-modes`` — semantics alone, no gas: drive towards the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s),
@@ -378,25 +381,40 @@ def space_aware_gain(sit: Situation, cells):
     entr(u) = w entr(p) + p entr(w). Every term is a product of a static row (ℓ, entr(ℓ), d_p, cached per cell)
     with p or entr(p), corrected on the few hypotheses that p finds: no (K, H·W) logarithm per decision.
     """
-    space = sit.space
-    post = sit.posterior.ravel()
-    ell = 2.0 * sit.found_radius
-    disc_bits = np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
+    p_f, rows = _found_mass(sit, cells)
+    return _space_aware_values(sit, _SpaceAware(sit), cells, p_f, rows)
 
-    def value(d, h_bits):
-        arg = d / ell + 2.0 ** (np.maximum(h_bits - disc_bits, 0.0) - 1.0) - 0.5
+
+class _SpaceAware:
+    """The parts of :func:`space_aware_gain` shared by every candidate of a decision."""
+
+    def __init__(self, sit: Situation):
+        space = sit.space
+        self.post = post = sit.posterior.ravel()
+        self.ell = 2.0 * sit.found_radius
+        self.disc_bits = np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
+        self.dist_now = dist_now = space.distances(sit.cell)
+        ok = np.isfinite(dist_now)
+        self.v_now = self.value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
+        self.a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
+        self.e_w = float(entr(1.0 - self.a))  # entr(w) on those hypotheses (0 for a detector that never misses)
+        self.e = entr(post)
+        self.pe = np.stack([post, self.e], axis=1)  # (n, 2)
+        self.gain = _semantic_gain(sit)  # I(S; O_n) per cell, None for olfaction
+
+    def value(self, d, h_bits):
+        """V = log₂(D/ℓ + 2^{max(H − disc, 0) − 1} − ½), and the argument itself where it is not positive."""
+        arg = d / self.ell + 2.0 ** (np.maximum(h_bits - self.disc_bits, 0.0) - 1.0) - 0.5
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
 
-    dist_now = space.distances(sit.cell)
-    ok = np.isfinite(dist_now)
-    v_now = value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
-    p_f, rows = _found_mass(sit, cells)
-    a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
-    e_w = float(entr(1.0 - a))  # entr(w) on those hypotheses (0 for a detector that never misses)
-    e = entr(post)
+
+def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows, phi_o_bits=None) -> np.ndarray:
+    """:func:`space_aware_gain` of ``cells`` with their P_f and found hypotheses (:func:`_found_mass`) and, if
+    computed already, their φ_O in bits (:func:`_view_bits`): each candidate's own products and the same
+    element-wise operations, whichever other candidates come with it."""
+    post, e, pe, a, e_w = sa.post, sa.e, sa.pe, sa.a, sa.e_w
     k_n = len(cells)
-    pe = np.stack([post, e], axis=1)  # (n, 2)
     dense = np.empty((k_n, 6))  # per candidate: L·p, L·e, H_b·p, entr(L)·p, (L∘d)·p, d·p  (L = P(hit), e = entr(p))
     corr = np.empty((k_n, 8))  # the same six over the hypotheses the candidate finds, then Σp and Σe there
     for k, (block, row, c) in enumerate(zip(_hit_blocks(sit, cells), rows, np.asarray(cells).tolist())):
@@ -421,16 +439,179 @@ def space_aware_gain(sit: Situation, cells):
     d_all = times_u(5)
     outcomes = ((z_hit, l_ent_u + u_e_hit, d_hit),  # hit
                 (mass - z_hit, (ent_u - l_ent_u) + (u_e_bin - u_e_hit), d_all - d_hit))  # miss
-    phi_o_bits = _view_information(sit, cells) / np.log(2)  # (K, n_h)
-    expected = np.zeros((k_n, len(space.headings)))
+    if phi_o_bits is None:
+        phi_o_bits = _view_bits(sit, sa, cells)  # (K, n_h)
+    expected = np.zeros((k_n, len(sit.space.headings)))
     norm = np.where(mass > 0, mass, 1.0)
     for z, t, d in outcomes:
         pos = z > 0
         zz = np.where(pos, z, 1.0)
         h_bits = np.where(pos, np.log(zz) + t / zz, 0.0) / np.log(2)
         d_h = np.where(pos, d / zz, 0.0)
-        expected += (np.where(pos, z, 0.0) / norm)[:, None] * value(d_h[:, None], h_bits[:, None] - phi_o_bits)
-    return v_now - (1.0 - p_f[:, None]) * expected
+        expected += (np.where(pos, z, 0.0) / norm)[:, None] * sa.value(d_h[:, None], h_bits[:, None] - phi_o_bits)
+    return sa.v_now - (1.0 - p_f[:, None]) * expected
+
+
+def _view_bits(sit: Situation, sa: _SpaceAware, cells) -> np.ndarray:
+    """φ_O / ln 2 for every candidate × heading (zeros for the olfaction variant), row by row."""
+    if sa.gain is None:
+        return np.zeros((len(cells), len(sit.space.headings))) / np.log(2)
+    return sit.space.view_gain(sa.gain, cells) / np.log(2)
+
+
+_EPS = float(np.finfo(np.float64).eps)
+
+
+def _space_aware_tiles(sit: Situation, cells) -> np.ndarray:
+    """(K, 4, T + 1) per candidate cell and tile t: P(hit | s) ∈ [lo_t, hi_t] on its cells (:func:`_hit_rows`),
+    min(entr(lo_t), entr(hi_t)) ≤ entr(P) and min(entr(1 − hi_t), entr(1 − lo_t)) ≤ entr(1 − P) there (entr is
+    concave), cached per cell with the rows."""
+    _hit_rows(sit, cells)
+    out = []
+    for c in np.asarray(cells).tolist():
+        st = sit.cache.get(("sa-tiles", c))
+        if st is None:
+            lo, hi = sit.cache[("tiles", c)][:2]
+            st = np.stack([lo, hi, np.minimum(entr(lo), entr(hi)), np.minimum(entr(1.0 - hi), entr(1.0 - lo))])
+            st.flags.writeable = False
+            sit.cache[("sa-tiles", c)] = st
+        out.append(st)
+    return np.stack(out)
+
+
+def _space_aware_stack(sit: Situation, cells):
+    """(K, 4, T + 1) :func:`_space_aware_tiles` and, per candidate, the tiles' distance floors δ, the tiles sorted
+    by δ and δ in that order ((K, T + 1) each, :meth:`FreeSpace.tile_distance_floor`), kept in the run cache for
+    the last candidate set only (a decision repeated at the same cell; emptied with the rows when the plume model
+    changes)."""
+    _hit_rows(sit, cells)  # first: empties the cache if the plume model changed
+    key = (int(sit.cell), float(sit.horizon), sit.far_spacing)
+    hit = sit.cache.get("sa-stack")
+    if hit is not None and hit[0] == key and np.array_equal(hit[1], cells):
+        return hit[2:]
+    floors = [sit.space.tile_distance_floor(c) for c in np.asarray(cells).tolist()]
+    delta = np.stack([f[0] for f in floors])
+    near_first = np.stack([f[1] for f in floors])
+    out = (_space_aware_tiles(sit, cells), delta, near_first, np.take_along_axis(delta, near_first, axis=1))
+    sit.cache["sa-stack"] = (key, np.array(cells)) + out
+    return out
+
+
+def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive, phi_o_bits) -> np.ndarray:
+    """(K, n_headings) an upper bound of the computed G(p) of :func:`space_aware_gain` of each candidate pose,
+    without the costly parts of its exact value: no geodesic distances from the candidate (a Dijkstra each), no
+    entr of its rows.
+
+    G = V_now − (1 − P_f) Σ_h (Z_h/M) V(D_h, H_h − φ_O/ln 2) grows as each V_h falls, and V is non-decreasing in
+    D and H where its argument is positive. Computed for each candidate (one product of its row with p and
+    entr(p), as in :func:`space_aware_gain`): Z_h and the part ℓ_h·entr(u) of the entropy's numerator; φ_O is
+    given. Bounded per tile t, with U_t the tile's sum of u (tile sums of p corrected on the found hypotheses),
+    ℓ_h ∈ [lo_t, hi_t] on it (hit; [1 − hi_t, 1 − lo_t] for a miss) and d_p ≥ δ_t
+    (:meth:`FreeSpace.tile_distance_floor`): u·entr(ℓ_h) ≥ Σ U_t min(entr(lo_t), entr(hi_t)) (entr is concave),
+    and (ℓ_h ∘ d_p)·u = Σ_t W_t d̄_t with W_t = Σ_{s ∈ t} ℓ_h u ∈ [lo_t U_t, hi_t U_t], Σ W_t = Z_h, d̄_t ≥ δ_t: at
+    least the least Σ W_t δ_t under those constraints (the mass above the lower ends poured into the tiles
+    nearest first). Every computed sum differs from its exact value by at most err = 8 ε (H·W + |found|) times
+    the sum of the magnitudes of its terms (d_p ≤ 2 (drive + max d_robot) + 1 m); the intervals are widened by a
+    few err, H is taken at its least over the interval of Z, each weight Z_h/M at the end of its interval that
+    makes the term smallest, and the result raised by 1e-9 (1 + the magnitudes) for the operations after the
+    sums. Not finite (so never pruned) when a bound fails: a found row with repeated hypotheses, P_f > 1, an
+    argument of V that may be ≤ 0, …"""
+    space = sit.space
+    cells = np.asarray(cells)
+    k_n, t1 = len(cells), space.n_tiles + 1
+    post, e, a, e_w = sa.post, sa.e, sa.a, sa.e_w
+    sizes = np.array([len(r) for r in rows], dtype=np.int64)
+    idx = np.concatenate(rows).astype(np.int64) if k_n else np.empty(0, np.int64)
+    owner = np.repeat(np.arange(k_n), sizes)
+    simple = np.ones(k_n, bool)  # rows of distinct hypotheses (sorted): u = p (1 − a) on them, p elsewhere
+    if idx.size:
+        repeated = np.zeros(idx.size, bool)
+        repeated[1:] = (idx[1:] <= idx[:-1]) & (owner[1:] == owner[:-1])
+        simple[owner[repeated]] = False
+    found_p = np.bincount(owner * t1 + space.tile[idx], weights=post[idx], minlength=k_n * t1).reshape(k_n, t1)
+    u_t = np.maximum(space.tile_sums(post)[None, :] - a * found_p, 0.0)  # Σ u per tile (≥ 0 exactly)
+    st, delta, near_first, delta_sorted = _space_aware_stack(sit, cells)
+    lo, hi = st[:, 0], st[:, 1]
+    # per candidate: ℓ·p, ℓ·e over the map and over the found hypotheses, Σp and Σe there
+    sums = np.empty((k_n, 6))
+    for k, (row, found) in enumerate(zip(_hit_rows(sit, cells), rows)):  # candidates (tens): one product each
+        p_m, e_m, l_m = post[found], e[found], row[found]
+        sums[k, :2] = row @ sa.pe
+        sums[k, 2:] = (l_m @ p_m, l_m @ e_m, p_m.sum(), e_m.sum())
+    mass = post.sum() - a * sums[:, 4]  # as the computed M, exactly
+    norm = np.where(mass > 0, mass, 1.0)
+    z_hit = sums[:, 0] - a * sums[:, 2]
+    a_hit = sums[:, 1] - a * sums[:, 3] + e_w * sums[:, 2]  # ℓ_hit · entr(u)
+    a_all = (e.sum() - a * sums[:, 5]) + e_w * sums[:, 4]  # Σ entr(u)
+    # rounding of the computed sums: terms of magnitude ≤ p (1 + d) and e + p (2 + e_w), H·W + |found| of them
+    d_max = 2.0 * (np.asarray(drive, dtype=np.float64) + float(np.max(sa.dist_now[np.isfinite(sa.dist_now)]))) + 1.0
+    scale = 2.0 * float(np.abs(post).sum()) * (3.0 + e_w + d_max) + 2.0 * float(e.sum())
+    err = 8.0 * _EPS * (post.size + sizes) * scale
+    # per tile: the lower ends of W_t (hit: lo U, miss: U − hi U) and the room above them, (hi − lo) U, for both
+    lo_u, hi_u = lo * u_t, hi * u_t
+    u_delta = np.einsum("kt,kt->k", u_t, delta)
+    caps = np.take_along_axis(hi_u - lo_u, near_first, axis=1)
+    before = np.cumsum(caps, axis=1)
+    before -= caps
+    total = np.zeros((k_n, phi_o_bits.shape[1]))
+    magnitude = np.zeros(k_n)
+    outcomes = ((lo_u.sum(axis=1), np.einsum("kt,kt->k", lo_u, delta), np.einsum("kt,kt->k", st[:, 2], u_t),
+                 z_hit, a_hit, 4.0 * err),  # hit
+                (u_t.sum(axis=1) - hi_u.sum(axis=1), u_delta - np.einsum("kt,kt->k", hi_u, delta),
+                 np.einsum("kt,kt->k", st[:, 3], u_t), mass - z_hit, a_all - a_hit, 8.0 * err))  # miss
+    for w_lo, base, e_min_u, z, t_known, slack in outcomes:
+        z_lo, z_hi = z - slack, z + slack
+        t_lo = t_known - slack + e_min_u - err
+        poured = np.clip((z_lo - w_lo)[:, None] - before, 0.0, caps)
+        dn_lo = base + np.einsum("kt,kt->k", poured, delta_sorted) - err
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            z_star = np.where(t_lo > 0, np.minimum(np.maximum(t_lo, z_lo), z_hi), z_lo)  # arg min of log Z + t/Z
+            safe = np.where(z_star > 0, z_star, 1.0)
+            h_lo = np.where(z_star > 0, np.log(safe) + t_lo / safe, -np.inf)
+            h_lo = h_lo / np.log(2) - 1e-9 * (1.0 + np.abs(h_lo))
+            d_lo = np.maximum(dn_lo, 0.0) / np.where(z_hi > 0, z_hi, 1.0)
+            h_eff = np.maximum(h_lo[:, None] - phi_o_bits * (1.0 + 1e-12) - 1e-12 - sa.disc_bits, 0.0)
+            arg = (d_lo[:, None] / sa.ell + 2.0 ** (h_eff - 1.0) - 0.5) * (1.0 - 1e-9)
+            v_lo = np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), -np.inf)
+            term = np.where(v_lo >= 0, (np.maximum(z_lo, 0.0) / norm)[:, None] * v_lo, (z_hi / norm)[:, None] * v_lo)
+        term = np.where((z_hi <= 0)[:, None], 0.0, term)  # an outcome of no mass adds nothing
+        total += term
+        magnitude += np.abs(term).max(axis=1)
+    with np.errstate(invalid="ignore"):
+        g = sa.v_now - (1.0 - p_f[:, None]) * total
+        g = g + (1e-9 * (1.0 + abs(sa.v_now) + magnitude))[:, None]
+    ok = simple & (p_f <= 1.0) & np.isfinite(phi_o_bits).all(axis=1)
+    return np.where(ok[:, None] & np.isfinite(g), g, np.inf)
+
+
+def _choose_space_aware(sit: Situation) -> Decision:
+    """The space-aware infotaxis decision, the best-scoring pose of :func:`space_aware_gain`, by branch and bound.
+
+    Every candidate pose's score has an upper bound: the scoring rule (monotone in G) of the bound of
+    :func:`_space_aware_bound` on its computed G; a candidate's bound is the largest over its headings. The candidates are evaluated exactly —
+    :func:`_space_aware_values`, each candidate's own products, the very numbers of :func:`space_aware_gain` —
+    from the highest bound down, until the next bound is below the best score found; the others cannot win (the
+    bound costs one product of its row and O(tiles) per candidate: no Dijkstra from it, no entr of its rows). The
+    winner is
+    the first maximum in lattice order among the evaluated ones, the candidate :func:`space_aware_gain` would pick.
+    """
+    cells, drive, pred, tau = _candidates(sit)
+    sa = _SpaceAware(sit)
+    p_f, rows = _found_mass(sit, cells)
+    phi = _view_bits(sit, sa, cells)  # exact (the views are cached per position), used by both
+    bound = _score(sit, _space_aware_bound(sit, sa, cells, p_f, rows, drive, phi), tau).max(axis=1)
+    order = np.argsort(-bound, kind="stable")
+    score = np.full(tau.shape, -np.inf)
+    best = -np.inf
+    for start in range(0, len(order), _CHUNK):
+        k = order[start : start + _CHUNK]
+        k = k[bound[k] >= best]
+        if k.size == 0:
+            break
+        gain = _space_aware_values(sit, sa, cells[k], p_f[k], [rows[i] for i in k.tolist()], phi[k])
+        score[k] = _score(sit, gain, tau[k])
+        best = max(best, float(score[k].max()))
+    return _best(score, cells, pred, drive, sit)
 
 
 def _towards(sit: Situation, target: int) -> Decision:
@@ -496,6 +677,5 @@ def choose(policy: str, sit: Situation) -> Decision:
     if policy == "infotaxis":
         return _choose_infotaxis(sit)
     if policy == "space-aware-infotaxis":
-        cells, drive, pred, tau = _candidates(sit)
-        return _best(_score(sit, space_aware_gain(sit, cells), tau), cells, pred, drive, sit)
+        return _choose_space_aware(sit)
     raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")

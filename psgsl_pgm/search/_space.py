@@ -14,11 +14,12 @@ same for every seed), and is split into the heading sectors by the same cone tes
 
 from __future__ import annotations
 
+import hashlib
 from collections import OrderedDict, deque
 
 import numpy as np
 from scipy import ndimage as ndi
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ..geometry._fov import ViewCache
 from ..geometry._grid import free_space_graph
@@ -26,6 +27,22 @@ from ..geometry._grid import free_space_graph
 __all__ = ["FreeSpace"]
 
 _TILE = 5  # cells per side of the tiles of FreeSpace.view_bound
+
+#: Per-position views shared by every FreeSpace of the same map, free cells, camera and headings in the process
+#: (each run of a grid builds its own FreeSpace; walls do not move): at most four maps, least recently used dropped.
+_SHARED_VIEWS: OrderedDict = OrderedDict()
+_SHARED_VIEWS_MAX = 4
+
+
+def _shared_views(key) -> dict:
+    hit = _SHARED_VIEWS.get(key)
+    if hit is None:
+        hit = _SHARED_VIEWS[key] = {}
+        if len(_SHARED_VIEWS) > _SHARED_VIEWS_MAX:
+            _SHARED_VIEWS.popitem(last=False)
+    else:
+        _SHARED_VIEWS.move_to_end(key)
+    return hit
 
 
 
@@ -101,7 +118,14 @@ class FreeSpace:
         self._tile_starts = np.searchsorted(self.tile[self._tile_order], np.arange(self.n_tiles))
         self._sight = ViewCache.shared(grid.occupancy, max_range=camera.max_range, half_angle=camera.half_angle,
                                        min_range=camera.min_range, resolution=grid.resolution, origin=grid.origin)
-        self._views: dict = {}  # cell -> (flat cells, (n_headings, m) bool sectors)
+        # cell -> (flat cells, (n_headings, m) bool sectors): what they depend on names the shared dict
+        digest = hashlib.sha1(np.ascontiguousarray(grid.occupancy).tobytes())
+        digest.update(np.ascontiguousarray(self.free).tobytes())
+        self._views: dict = _shared_views((digest.hexdigest(), self.nav.shape, self.resolution,
+                                           tuple(np.asarray(grid.origin, dtype=np.float64).ravel().tolist()),
+                                           float(camera.max_range), float(camera.half_angle),
+                                           float(camera.min_range), self.headings.tobytes()))
+        self._component = None  # connected component of every cell in the graph (computed on first use)
 
     # --- cells and positions ------------------------------------------------------------------------------
     def cell_of(self, xy) -> int:
@@ -160,6 +184,44 @@ class FreeSpace:
         else:
             self._dist_cache.move_to_end(cell)
         return d
+
+    def tile_distance_floor(self, cell: int):
+        """A lower bound of the finite geodesic distances from navigable ``cell`` over each tile (cached).
+
+        Returns
+        -------
+        floor : (T + 1,) ndarray
+            Entry t ≤ the least distance to a free cell of tile t, entry T = 0 (below).
+        order : (T + 1,) ndarray of int
+            The tiles sorted by ``floor``, ascending (stable).
+
+        floor[t] ≤ min over the free cells s of tile t of d(s) = :meth:`distances` (``cell``)[s], taken as 0 where
+        it is infinite (the convention of the policies); floor[T] (every cell that is not free) is 0. On the graph
+        (8 neighbours, edges of h and h√2 m, no corner cutting) a path from ``cell`` to the navigable cell n(s)
+        is at least the octile distance h (max(Δr, Δc) + (√2 − 1) min(Δr, Δc)); then d(s) ≥ octile + offset(s).
+        Times 1 − 1e-9, far below the relative rounding of a Dijkstra sum over fewer than 10⁶ edges (≤ 1e-10).
+        No Dijkstra: O(H·W) array operations.
+        """
+        cell = int(cell)
+        key = ("floor", cell)
+        hit = self._discs.get(key)
+        if hit is None:
+            if self._component is None:
+                self._component = connected_components(self.graph, directed=False)[1]
+            w = self.nav.shape[1]
+            r0, c0 = divmod(cell, w)
+            rn, cn = np.divmod(self._nearest_nav, w)
+            dr, dc = np.abs(rn - r0), np.abs(cn - c0)
+            octile = self.resolution * (np.maximum(dr, dc) + (np.sqrt(2.0) - 1.0) * np.minimum(dr, dc))
+            low = (octile + self._offset) * (1.0 - 1e-9)
+            low[self._component[self._nearest_nav] != self._component[cell]] = 0.0  # unreachable: d taken as 0
+            floor = np.zeros(self.n_tiles + 1)
+            floor[:-1] = np.minimum.reduceat(low[self._tile_order], self._tile_starts)
+            hit = (floor, np.argsort(floor, kind="stable"))
+            for v in hit:
+                v.flags.writeable = False
+            self._discs[key] = hit
+        return hit
 
     def far_lattice(self, spacing: float) -> np.ndarray:
         """(H, W) bool: navigable cells of a lattice of ``spacing`` m (cached), the targets beyond the horizon."""
