@@ -16,4 +16,9 @@ def column_sum(values: np.ndarray, column_axis, ndim: int) -> np.ndarray:
             f"column_axis must index one of the {ndim} cell axes (class axis excluded) and leave at least one, "
             f"got {column_axis}"
         )
-    return values.sum(axis=int(column_axis))
+    axis = int(column_axis) % ndim
+    if isinstance(values, np.ndarray):  # each column summed in order along the axis, in one compiled pass
+        from ..kernels._belief import column_sums  # compiled (numba), loaded on first use
+
+        return column_sums(np.ascontiguousarray(values, dtype=np.float64), axis)
+    return values.sum(axis=axis)  # a dask array: a lazy reduction over its chunks

@@ -38,6 +38,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numba as nb
 import numpy as np
+from numba import types
+from numba.extending import overload
 
 from . import _cache as _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
 from ._prefetch import prefetch
@@ -59,6 +61,7 @@ __all__ = [
     "fuse_write",
     "fuse_step",
     "fuse_finish",
+    "column_sums",
 ]
 
 CHUNK = 4096  # cells per parallel work item: large enough to amortise scheduling, small enough to balance
@@ -80,6 +83,7 @@ PARALLEL_MIN = 1 << 23  # elements read below which one thread is used: ~5 ms of
 
 _FASTMATH = {"reassoc", "contract", "nsz", "arcp"}  # never nnan / ninf: NaN and inf must propagate
 _JIT = dict(nogil=True, cache=True, fastmath=_FASTMATH, error_model="numpy")
+_JIT_STRICT = dict(nogil=True, cache=True, error_model="numpy")  # no re-association: a fixed summation order
 _THREADS = max(1, min(8, os.cpu_count() or 1))
 _POOL: ThreadPoolExecutor | None = None
 
@@ -303,24 +307,6 @@ def _belief_moments(q, rho, rho_log_rho, zero, f, f_uniform, paper, w, mom, part
 
 
 @nb.njit(**_JIT)
-def _entropy_terms(w, f, f_uniform, total, log_w, log_f, log_total, part, c0, c1):
-    """H(S) = −Σ_n P_n log P_n with P_n = f_n w_n / U (``total`` = U), log P_n = log f_n + log w_n − log U."""
-    n = w.shape[0]
-    has_f = f.shape[0] > 0
-    log_uniform = math.log(f_uniform) if f_uniform > 0 else 0.0
-    for c in range(c0, c1):
-        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
-        wc, lwc = w[lo:hi], log_w[lo:hi]  # views: indices from 0 vectorise to contiguous loads, not gathers
-        fc, lfc = (f[lo:hi], log_f[lo:hi]) if has_f else (f[:0], log_f[:0])
-        h = 0.0
-        for r in range(hi - lo):
-            p = (fc[r] if has_f else f_uniform) * wc[r] / total
-            if p > 0:
-                h -= p * ((lfc[r] if has_f else log_uniform) + lwc[r] - log_total)
-        part[c] = h
-
-
-@nb.njit(**_JIT)
 def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy, radius, paper, log_w, log_f,
                        log_total, out, c0, c1):
     r"""I(S; O_n) for every cell from its moments (series) or, where the series converges slowly, its row.
@@ -396,57 +382,6 @@ def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy
 
 
 @nb.njit(**_JIT)
-def _fuse_sum(a, b, prior, extra, part, c0, c1):
-    """First pass of fusing two inputs: the checks of both and T = Σ_c a_c b_c / prior_c^extra.
-
-    Nothing is stored. A cell whose product of positive factors falls below :data:`TINY`, or whose quotient
-    exceeds :data:`HUGE`, is counted as unsafe and left out of T (the caller then takes the log-space route).
-    Partials per chunk: [negatives of a, Σ a, negatives of b, Σ b, unsafe cells, T, cells where the product
-    is positive but the prior is zero]. The vectorised sums do not depend on where the inputs sit in memory
-    (tested: tests/kernels/test_kernels_speed.py).
-    """
-    n = a.shape[0]
-    has_prior = prior.shape[0] > 0
-    for c in range(c0, c1):
-        neg_a = 0
-        neg_b = 0
-        sa = 0.0
-        sb = 0.0
-        total = 0.0
-        unsafe = 0
-        zero_support = 0
-        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
-        ac, bc, pc = a[lo:hi], b[lo:hi], prior[lo:hi] if has_prior else prior
-        for i in range(hi - lo):
-            x = np.float64(ac[i])
-            y = np.float64(bc[i])
-            neg_a += x < 0
-            neg_b += y < 0
-            sa += x
-            sb += y
-            z = x * y  # p(s_c|e_1) p(s_c|e_2)
-            bad = (z < TINY) & (x > 0) & (y > 0)
-            if has_prior:
-                pr = np.float64(pc[i])
-                if z != 0.0 and pr == 0.0:
-                    zero_support += 1
-                    z = 0.0
-                elif z > 0.0:
-                    for _ in range(extra):
-                        z /= pr  # ÷ p(s_c)^(m−1)
-                    bad |= z > HUGE
-            unsafe += bad
-            total += 0.0 if bad else z
-        part[c, 0] = neg_a
-        part[c, 1] = sa
-        part[c, 2] = neg_b
-        part[c, 3] = sb
-        part[c, 4] = unsafe
-        part[c, 5] = total
-        part[c, 6] = zero_support
-
-
-@nb.njit(**_JIT)
 def _fuse_write(out, a, b, prior, extra, total, c0, c1):
     """Second pass: out = a b / prior^extra / T, rounded once to ``out``'s dtype (eq. ``combined-conditionals``)."""
     n = a.shape[0]
@@ -462,71 +397,201 @@ def _fuse_write(out, a, b, prior, extra, total, c0, c1):
         oc[i] = z / total
 
 
+# --- The light per-cell passes (entropy, fusion): one chunk driver, one body per pass ---------------------------
+
+
+def each_chunk(body, part, n, c0, c1, args):
+    """Run ``body(part[c], lo, hi, *args)`` on the cells [lo, hi) of every chunk c in [c0, c1) (compiled only).
+
+    ``body`` is the name (a string literal) of a per-chunk body in :data:`_BODIES`; each body reads its cells,
+    writes the chunk's partial results into its row ``part[c]`` and returns nothing. (A name rather than the
+    function itself: numba cannot cache a function that is handed another compiled function as a value.)
+    """
+    raise TypeError("each_chunk is called from compiled kernels only")
+
+
+@overload(each_chunk, jit_options=_JIT)
+def _each_chunk_impl(body, part, n, c0, c1, args):
+    if not isinstance(body, types.StringLiteral):
+        return None
+    cells = _BODIES[body.literal_value]
+
+    def impl(body, part, n, c0, c1, args):
+        for c in range(c0, c1):
+            cells(part[c], c * CHUNK, min(n, (c + 1) * CHUNK), *args)
+
+    return impl
+
+
 @nb.njit(**_JIT)
-def _fuse_step(p, a, first, part, c0, c1):
-    """Multiply the running product ``p`` by ``a`` in place (``first``: set p = a).
+def _entropy_cells(row, lo, hi, w, f, f_uniform, total, log_w, log_f, log_total):
+    """Σ −P_n log P_n over cells [lo, hi), with P_n = f_n w_n / U (``total`` = U), log P_n = log f_n + log w_n − log U."""
+    has_f = f.shape[0] > 0
+    log_uniform = math.log(f_uniform) if f_uniform > 0 else 0.0
+    wc, lwc = w[lo:hi], log_w[lo:hi]  # views: indices from 0 vectorise to contiguous loads, not gathers
+    fc, lfc = (f[lo:hi], log_f[lo:hi]) if has_f else (f[:0], log_f[:0])
+    h = 0.0
+    for r in range(hi - lo):
+        p = (fc[r] if has_f else f_uniform) * wc[r] / total
+        if p > 0:
+            h -= p * ((lfc[r] if has_f else log_uniform) + lwc[r] - log_total)
+    row[0] = h
+
+
+@nb.njit(**_JIT)
+def _fuse_sum_cells(row, lo, hi, a, b, prior, extra):
+    """First pass of fusing two inputs over cells [lo, hi): the checks of both and T = Σ_c a_c b_c / prior_c^extra.
+
+    Nothing is stored. A cell whose product of positive factors falls below :data:`TINY`, or whose quotient
+    exceeds :data:`HUGE`, is counted as unsafe and left out of T (the caller then takes the log-space route).
+    ``row``: [negatives of a, Σ a, negatives of b, Σ b, unsafe cells, T, cells where the product is positive
+    but the prior is zero]. The vectorised sums do not depend on where the inputs sit in memory (tested:
+    tests/kernels/test_kernels_speed.py).
+    """
+    has_prior = prior.shape[0] > 0
+    neg_a = 0
+    neg_b = 0
+    sa = 0.0
+    sb = 0.0
+    total = 0.0
+    unsafe = 0
+    zero_support = 0
+    ac, bc, pc = a[lo:hi], b[lo:hi], prior[lo:hi] if has_prior else prior
+    for i in range(hi - lo):
+        x = np.float64(ac[i])
+        y = np.float64(bc[i])
+        neg_a += x < 0
+        neg_b += y < 0
+        sa += x
+        sb += y
+        z = x * y  # p(s_c|e_1) p(s_c|e_2)
+        bad = (z < TINY) & (x > 0) & (y > 0)
+        if has_prior:
+            pr = np.float64(pc[i])
+            if z != 0.0 and pr == 0.0:
+                zero_support += 1
+                z = 0.0
+            elif z > 0.0:
+                for _ in range(extra):
+                    z /= pr  # ÷ p(s_c)^(m−1)
+                bad |= z > HUGE
+        unsafe += bad
+        total += 0.0 if bad else z
+    row[0] = neg_a
+    row[1] = sa
+    row[2] = neg_b
+    row[3] = sb
+    row[4] = unsafe
+    row[5] = total
+    row[6] = zero_support
+
+
+@nb.njit(**_JIT)
+def _fuse_step_cells(row, lo, hi, p, a, first):
+    """Multiply the running product ``p`` by ``a`` in place on cells [lo, hi) (``first``: set p = a).
 
     A cell whose product of positive factors falls below :data:`TINY` is marked −1 (it is recomputed in log
-    space by the caller) and stays marked. Returns [negative entries of a, Σ a, newly marked cells].
+    space by the caller) and stays marked. ``row``: [negative entries of a, Σ a, newly marked cells].
     """
-    n = p.shape[0]
-    for c in range(c0, c1):
-        neg = 0
-        s = 0.0
-        unsafe = 0
-        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
-        pch, ac = p[lo:hi], a[lo:hi]
-        for i in range(hi - lo):
-            x = np.float64(ac[i])
-            neg += x < 0
-            s += x
-            if first:
-                pch[i] = x
-            else:
-                pc = pch[i]
-                z = pc * x
-                bad = (z < TINY) & (pc > 0) & (x > 0)
-                unsafe += bad
-                pch[i] = -1.0 if (bad | (pc < 0)) else z
-        part[c, 0] = neg
-        part[c, 1] = s
-        part[c, 2] = unsafe
+    neg = 0
+    s = 0.0
+    unsafe = 0
+    pch, ac = p[lo:hi], a[lo:hi]
+    for i in range(hi - lo):
+        x = np.float64(ac[i])
+        neg += x < 0
+        s += x
+        if first:
+            pch[i] = x
+        else:
+            pc = pch[i]
+            z = pc * x
+            bad = (z < TINY) & (pc > 0) & (x > 0)
+            unsafe += bad
+            pch[i] = -1.0 if (bad | (pc < 0)) else z
+    row[0] = neg
+    row[1] = s
+    row[2] = unsafe
+
+
+@nb.njit(**_JIT)
+def _fuse_finish_cells(row, lo, hi, p, prior, extra):
+    """Divide the product by prior^extra (when ``prior`` is non-empty) and sum the cells of [lo, hi) not marked.
+
+    A quotient above :data:`HUGE` is marked −1 too. ``row``: [Σ unmarked p, marked cells, cells where the
+    product is positive (or marked) but the prior is zero].
+    """
+    has_prior = prior.shape[0] > 0
+    s = 0.0
+    marked = 0
+    zero_support = 0
+    pch, prc = p[lo:hi], prior[lo:hi] if has_prior else prior
+    for i in range(hi - lo):
+        y = pch[i]
+        if has_prior:
+            pr = prc[i]
+            if y != 0.0 and pr == 0.0:
+                zero_support += 1
+            elif y > 0.0:
+                for _ in range(extra):
+                    y /= pr
+                if y > HUGE:
+                    y = -1.0
+                pch[i] = y
+        if y < 0.0:
+            marked += 1
+        else:
+            s += y
+    row[0] = s
+    row[1] = marked
+    row[2] = zero_support
+
+
+_BODIES = {"entropy": _entropy_cells, "fuse_sum": _fuse_sum_cells, "fuse_step": _fuse_step_cells,
+           "fuse_finish": _fuse_finish_cells}
+
+
+@nb.njit(**_JIT)
+def _entropy_terms(w, f, f_uniform, total, log_w, log_f, log_total, part, c0, c1):
+    """H(S) = −Σ_n P_n log P_n with P_n = f_n w_n / U, one partial per chunk (:func:`_entropy_cells`)."""
+    each_chunk("entropy", part, w.shape[0], c0, c1, (w, f, f_uniform, total, log_w, log_f, log_total))
+
+
+@nb.njit(**_JIT)
+def _fuse_sum(a, b, prior, extra, part, c0, c1):
+    """First pass of fusing two inputs, one row of partials per chunk (:func:`_fuse_sum_cells`)."""
+    each_chunk("fuse_sum", part, a.shape[0], c0, c1, (a, b, prior, extra))
+
+
+@nb.njit(**_JIT)
+def _fuse_step(p, a, first, part, c0, c1):
+    """Multiply the running product ``p`` by ``a`` in place, one row of partials per chunk (:func:`_fuse_step_cells`)."""
+    each_chunk("fuse_step", part, p.shape[0], c0, c1, (p, a, first))
 
 
 @nb.njit(**_JIT)
 def _fuse_finish(p, prior, extra, part, c0, c1):
-    """Divide the product by prior^extra (when ``prior`` is non-empty) and sum the cells not marked.
+    """Divide by prior^extra and sum the unmarked cells, one row of partials per chunk (:func:`_fuse_finish_cells`)."""
+    each_chunk("fuse_finish", part, p.shape[0], c0, c1, (p, prior, extra))
 
-    A quotient above :data:`HUGE` is marked −1 too. Returns [Σ unmarked p, marked cells, cells where the
-    product is positive (or marked) but the prior is zero].
+
+@nb.njit(**_JIT_STRICT)
+def _column_sums(w3, out, c0, c1):
+    """out[a, b] = Σ_j w3[a, j, b], j = 0, 1, … in turn, for the output cells of chunks [c0, c1) (flat a·B + b).
+
+    Compiled without re-association, so every column is summed in the same order (the voxels from the first
+    along the column axis), whatever the CPU or where the column lies; the columns are independent chains the
+    CPU overlaps.
     """
-    n = p.shape[0]
-    has_prior = prior.shape[0] > 0
-    for c in range(c0, c1):
+    size_a, m, size_b = w3.shape
+    flat = out.reshape(-1)
+    for cell in range(c0 * CHUNK, min(size_a * size_b, c1 * CHUNK)):
+        a = cell // size_b
+        b = cell - a * size_b
         s = 0.0
-        marked = 0
-        zero_support = 0
-        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
-        pch, prc = p[lo:hi], prior[lo:hi] if has_prior else prior
-        for i in range(hi - lo):
-            y = pch[i]
-            if has_prior:
-                pr = prc[i]
-                if y != 0.0 and pr == 0.0:
-                    zero_support += 1
-                elif y > 0.0:
-                    for _ in range(extra):
-                        y /= pr
-                    if y > HUGE:
-                        y = -1.0
-                    pch[i] = y
-            if y < 0.0:
-                marked += 1
-            else:
-                s += y
-        part[c, 0] = s
-        part[c, 1] = marked
-        part[c, 2] = zero_support
+        for j in range(m):
+            s += w3[a, j, b]
+        flat[cell] = s
 
 
 # --- Python entry points: allocate outputs, run the chunks, combine the partials in chunk order -------------
@@ -616,7 +681,7 @@ def entropy_terms(w, f, f_uniform, total, logs=None) -> float:
     """H(S) = −Σ_n P_n log P_n with P_n = f_n w_n / U (``total`` = U); ``logs`` from :func:`cell_logs`."""
     n = w.shape[0]
     log_w, log_f = cell_logs(w, f) if logs is None else logs
-    part = np.zeros(n_chunks(n))
+    part = np.zeros((n_chunks(n), 1))
     run(_entropy_terms, n, PASS_WORK * n, w, f, f_uniform, total, log_w, log_f, math.log(total), part)
     return float(part.sum())
 
@@ -677,3 +742,30 @@ def fuse_finish(p, prior, extra: int):
     run(_fuse_finish, n, 3 * n, p, prior, extra, part)
     t = part.sum(axis=0)
     return float(t[0]), int(t[1]), int(t[2])
+
+
+def column_sums(values, axis: int):
+    """Σ over one axis of a C-contiguous float64 array, each sum taken in order along the axis (one pass).
+
+    Sec. "Voxelized Scene Representations": p(s_c | z) = Σ_{v ∈ c} p(s_v | z). NumPy's ``sum`` over a short
+    last axis (a column of tens of voxels) spends most of its time starting each small reduction; this pass
+    reads the weights once and sums every column as one chain of additions.
+
+    Parameters
+    ----------
+    values : (...) float64 ndarray, C-contiguous
+    axis : int
+        A non-negative axis of ``values``.
+
+    Returns
+    -------
+    sums : float64 ndarray
+        ``values``'s shape without ``axis``.
+    """
+    shape = values.shape
+    size_a = int(np.prod(shape[:axis], dtype=np.int64))
+    size_b = int(np.prod(shape[axis + 1:], dtype=np.int64))
+    out = np.empty(shape[:axis] + shape[axis + 1:])
+    w3 = values.reshape(size_a, shape[axis], size_b)
+    run(_column_sums, size_a * size_b, values.size, w3, out.reshape(size_a, size_b))
+    return out

@@ -75,3 +75,17 @@ def test_moments_match_a_direct_float64_computation_for_every_row_length(k, dtyp
             bad = q.copy()
             bad[row, cls] = -tiny
             assert _kernel.belief_moments(bad, rho, rlr, np.zeros(k), f, 0.0, paper)[2][0] > 0, (row, cls)
+
+
+@pytest.mark.parametrize("shape", [(200, 25), (6, 7, 5), (3, 4100), (9000, 3), (1, 1), (0, 3), (4, 0, 2), (5,)])
+def test_column_sums_add_each_column_in_order_along_its_axis(shape):
+    # Sec. "Voxelized Scene Representations": Σ_{v ∈ c} p(s_v | z), over any axis, several chunks of columns
+    rng = np.random.default_rng(len(shape))
+    values = rng.random(shape) * 10.0 ** rng.integers(-8, 8, size=shape)  # magnitudes where order shows
+    for axis in range(len(shape)):
+        got = _kernel.column_sums(values, axis)
+        want = np.zeros(shape[:axis] + shape[axis + 1:])
+        for j in range(shape[axis]):  # the first voxel of the column first, one addition after another
+            want = want + np.take(values, j, axis=axis)
+        assert got.shape == want.shape and got.dtype == np.float64
+        np.testing.assert_array_equal(got, want)
