@@ -45,6 +45,12 @@ class PMFSEstimator(OlfactoryEstimator):
     The measured wind orients and stretches the hit-map kernel, as in PMFS; when a reading comes without wind,
     the model's wind field at the sensor cell is used. The estimator is deterministic.
 
+    Because every factor is bounded and saturates with its cell's confidence, repeated readings at one cell move
+    the posterior less and less, unlike a Bayes update (whose factors P(g | s) multiply up). A planner that
+    expects I(S; hit) from a reading here expects information this estimator never takes in:
+    :meth:`reading_log_ratio` gives the factor its update would actually apply, so that the closed loop's φ_G is
+    the expected entropy drop under this update (the policies of :mod:`psgsl_pgm.search`).
+
     Parameters
     ----------
     occupancy : (H, W) ndarray of bool
@@ -143,6 +149,8 @@ class PMFSEstimator(OlfactoryEstimator):
         self._h_used = np.empty(0)  # ĥ_c and conf_c behind the current score
         self._conf_used = np.empty(0)
         self._score = np.zeros(n)  # Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|]
+        self._kernels: dict[int, np.ndarray] = {}  # hit-map kernels in the model's wind, per flat cell
+        self._kernel_model = self.model
 
     def _log_factors(self, rows: np.ndarray, h_obs: np.ndarray, conf: np.ndarray) -> np.ndarray:
         """Σ over the given compared cells of log[1 − γ conf_c |ĥ_c − h_c(s)|], for every s."""
@@ -182,6 +190,71 @@ class PMFSEstimator(OlfactoryEstimator):
         if new:
             self._slot[flat] = len(self._cells)
             self._cells.append(flat)
+
+    def reading_log_ratio(self, positions) -> np.ndarray:
+        """How one more reading would move the posterior: λ [S'(s) − S(s)] for a miss and for a hit at each position.
+
+        With S(s) = Σ_c log[1 − γ conf_c abs(ĥ_c − h_c(s))] the current score and S'_g(s) the score after one
+        reading g ∈ {miss, hit} at x (the hit map updated by its kernel, x added to the compared cells if new),
+        :meth:`update` turns p(s | g) into p(s | g, g_x) ∝ p(s | g) · L_g(s), L_g = exp(λ [S'_g − S]) — the
+        estimator's own update, written as a factor on the current posterior (the "not found" factors and a fused
+        semantic term multiply both sides alike). For a Bayesian estimator L_g(s) would be P(g | s); for PMFS it is
+        the pseudo-likelihood the recomputed score implies, which is what the closed loop must expect a reading
+        to do (the policies of :mod:`psgsl_pgm.search`). The kernel is oriented by the model's wind at x (the
+        wind the reading will bring is not known before it); the state is not changed.
+
+        Only the compared cells within the kernel's reach change, so the cost is one log per free cell for each of
+        them and for x itself; the kernels are cached per cell until the plume model changes.
+
+        Parameters
+        ----------
+        positions : (n, 2) array_like of float
+            Sensor positions (x, y) in metres (free cells).
+
+        Returns
+        -------
+        log_ratio : (n, 2, H, W) ndarray of float64
+            [:, 0] for a miss, [:, 1] for a hit; −inf nowhere (every PMFS factor is ≥ 1 − γ > 0), 0 on cells that
+            are not free (their posterior is 0 anyway).
+        """
+        cells = self._flat_cells(positions)
+        n = self.geometry.shape[0] * self.geometry.shape[1]
+        out = np.zeros((len(cells), 2, n))
+        hm = self._hitmap
+        m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+        compared = np.asarray(self._cells, dtype=np.int64)
+        if self._kernel_model is not self.model:
+            self._kernels.clear()
+            self._kernel_model = self.model
+        for k, flat in enumerate(cells.tolist()):
+            w = self._kernels.get(flat)
+            if w is None:
+                r, c = divmod(flat, self.geometry.shape[1])
+                w = self._kernels[flat] = hm.kernel((r, c), tuple(self.model.wind[r, c]))
+            slots = np.flatnonzero(w[compared] > 0) if compared.size else np.zeros(0, np.int64)
+            new = flat not in self._slot
+            at = compared[slots]
+            if new:  # x joins the compared cells with its own row h_x(s)
+                at = np.append(at, flat)
+                row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0])
+                rows = np.concatenate([self._pred[slots], row_new[None]])
+            else:
+                rows = self._pred[slots]
+            weight = hm._weight[at]
+            h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
+            conf_old = -np.expm1(-weight / n0)
+            old = np.log1p(-self.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
+            if new:
+                old[-1] = 0.0  # x was not compared before: no factor
+            old = old.sum(axis=0)
+            weight_new = weight + w[at]
+            conf_new = -np.expm1(-weight_new / n0)
+            for g in (0, 1):
+                h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
+                fac = np.log1p(-self.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
+                out[k, g] = self.tempering * (fac.sum(axis=0) - old)
+        out[:, :, ~self.geometry.free.ravel()] = 0.0
+        return out.reshape((len(cells), 2) + self.geometry.shape)
 
     @property
     def score(self) -> np.ndarray:

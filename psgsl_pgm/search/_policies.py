@@ -45,6 +45,8 @@ moves (:meth:`FreeSpace.candidates`).
   G(p) = P_f(p) H(S) + (1 − P_f(p)) [φ_G(p) + φ_O(p)], φ_G = I(S; hit at p) under the variant's posterior and
   φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
   Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
+  With the PMFS estimator, whose posterior is recomputed from a hit map rather than updated by Bayes' rule, φ_G
+  is the expected entropy drop under that estimator's own update (:func:`olfactory_gain`).
 * ``space-aware-infotaxis`` — Loisy & Eloy (2022): the value V = log₂(D + 2^{H−1} − ½), with D the expected
   distance to the source and H the entropy in bits, estimates log₂ of the remaining search; in the house D is
   the expected geodesic distance in units of the found diameter ℓ = 2 ``found_radius`` and H is counted over
@@ -287,10 +289,54 @@ def _finite_distances(sit: Situation, cell: int) -> np.ndarray:
     return d
 
 
+def _reading_factors(sit: Situation, cells):
+    """Per candidate cell, the (2, H·W) log factors log L_g(s), g ∈ {miss, hit}, by which the estimator's own
+    update would multiply the posterior after one reading there, or None for a Bayesian estimator (whose factor is
+    the hit model P(g | s) itself). A pseudo-likelihood estimator (PMFS) says so by ``reading_log_ratio``
+    (:meth:`psgsl_pgm.olfaction.PMFSEstimator.reading_log_ratio`); its factors depend on the readings so far."""
+    ratio = getattr(sit.beliefs.estimator, "reading_log_ratio", None)
+    if ratio is None:
+        return None
+    return ratio(sit.space.position(cells)).reshape(len(cells), 2, -1)
+
+
+def _expected_entropy_drop(post, p_hit, log_factors) -> np.ndarray:
+    """H(p) − Σ_g P(g) H(q_g), q_g ∝ p L_g, for one candidate; ``p_hit`` = P(hit), ``log_factors`` (2, H·W)."""
+    e_post = entr(post)
+    out = float(e_post.sum())
+    for g, prob in ((0, 1.0 - p_hit), (1, p_hit)):
+        ell = log_factors[g]
+        ell = ell - ell[post > 0].max()  # L_g up to a constant, at most 1 where p > 0
+        lik = np.exp(ell)
+        z = float(lik @ post)
+        # H(q) = log Z − Σ q log(p L / max L) = log Z + [L·entr(p) − (p ∘ L)·log L] / Z
+        out -= prob * (np.log(z) + (lik @ e_post - (post * lik) @ ell) / z)
+    return out
+
+
 def olfactory_gain(sit: Situation, cells) -> np.ndarray:
-    """φ_G = I(S; hit at p) = H_b(Σ_s p(s) P_p(s)) − Σ_s p(s) H_b(P_p(s)) under the variant's posterior, (K,) nats
-    (:meth:`OlfactoryEstimator.information_gain` with ``posterior=``, with the static rows cached)."""
+    """φ_G, the information about S one gas reading at p is expected to bring, (K,) nats.
+
+    For a Bayesian estimator (grid Infotaxis) φ_G = I(S; hit at p) = H_b(Σ_s p(s) P_p(s)) − Σ_s p(s) H_b(P_p(s))
+    under the variant's posterior (:meth:`OlfactoryEstimator.information_gain` with ``posterior=``, the static rows
+    cached). That mutual information is the expected drop of H(S) *when the posterior is updated by Bayes' rule
+    with P_p(s)*. The PMFS posterior is not: it is recomputed from the hit map, each compared cell's factor is
+    bounded in [1 − γ, 1] and saturates with its confidence, so repeated readings at one stop move it less and
+    less, while I(S; hit at p) under the same posterior stays what it was — the policy keeps expecting
+    information the estimator never takes in, and cycles between two stops. For such an estimator
+    (``reading_log_ratio``, :func:`_reading_factors`) φ_G is the expected entropy drop under its own update,
+
+        φ_G(p) = H(S) − Σ_{g ∈ {miss, hit}} P(g at p) H(q_g),   q_g ∝ p(s | ·) L_g(s),
+
+    with P(hit at p) = Σ_s p(s) P_p(s) from the estimator's hit model h_p(s) (the same predictive as above) and
+    L_g its update factor. For a Bayes update L_g = P(g | s) and this is the mutual information again (the two
+    definitions of infotaxis, Vergassola et al. 2007, coincide); for PMFS it may be negative (a reading expected to
+    spread the posterior). Exact, one pass over the free cells per candidate and outcome."""
+    factors = _reading_factors(sit, cells)
     post = sit.posterior.ravel()
+    if factors is not None:
+        p_hit = np.array([r @ post for r in _hit_rows(sit, cells)])
+        return np.array([_expected_entropy_drop(post, ph, f) for ph, f in zip(p_hit, factors)])
     # one (2, H·W) product per candidate, on its cached rows in place (no (K, H·W) copy)
     dots = np.array([b[:2] @ post for b in _hit_blocks(sit, cells)]).reshape(-1, 2)
     p_bar = dots[:, 0]
@@ -350,6 +396,8 @@ def _choose_infotaxis(sit: Situation) -> Decision:
     first maximum in lattice order among the evaluated ones, the candidate :func:`infotaxis_gain` would pick.
     """
     cells, drive, pred, tau = _candidates(sit)
+    if getattr(sit.beliefs.estimator, "reading_log_ratio", None) is not None:  # φ_G under its own update: no bound
+        return _best(_score(sit, infotaxis_gain(sit, cells), tau), cells, pred, drive, sit)
     p_f, _ = _found_mass(sit, cells)
     h = float(entr(sit.posterior).sum())
     gain = _semantic_gain(sit)
@@ -380,9 +428,17 @@ def space_aware_gain(sit: Situation, cells):
     expected distance are H = log Z + [ℓ·entr(u) + u·entr(ℓ)]/Z and D = (ℓ ∘ d_p)·u / Z (entr(x) = −x log x);
     entr(u) = w entr(p) + p entr(w). Every term is a product of a static row (ℓ, entr(ℓ), d_p, cached per cell)
     with p or entr(p), corrected on the few hypotheses that p finds: no (K, H·W) logarithm per decision.
+
+    An estimator that does not update by Bayes' rule (PMFS, see :func:`olfactory_gain`) forms the outcome's
+    posterior with its own factor instead, u ∘ L_h / (L_h·u); the outcome keeps the predictive weight
+    P(h | p, F̄) = (P(h | ·)·u) / Σu of its hit model.
     """
     p_f, rows = _found_mass(sit, cells)
-    return _space_aware_values(sit, _SpaceAware(sit), cells, p_f, rows)
+    sa = _SpaceAware(sit)
+    factors = _reading_factors(sit, cells)
+    if factors is not None:  # the estimator's own update (PMFS)
+        return _space_aware_own_update(sit, sa, cells, p_f, rows, factors)
+    return _space_aware_values(sit, sa, cells, p_f, rows)
 
 
 class _SpaceAware:
@@ -408,6 +464,30 @@ class _SpaceAware:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
 
+def _space_aware_own_update(sit: Situation, sa: _SpaceAware, cells, p_f, rows, factors) -> np.ndarray:
+    """:func:`space_aware_gain` for an estimator that updates by its own factors L_h (PMFS): each outcome's
+    posterior u ∘ L_h / (L_h·u), weighted by the hit model's predictive P(h | p, F̄) (loops over candidates:
+    tens)."""
+    space = sit.space
+    post, a = sa.post, sa.a
+    phi_o_bits = _view_information(sit, cells) / np.log(2)
+    expected = np.zeros((len(cells), len(space.headings)))
+    for k, (row, c, f) in enumerate(zip(rows, np.asarray(cells).tolist(), factors)):
+        u = post.copy()
+        u[row] *= 1.0 - a
+        mass = u.sum()
+        if not mass > 0:
+            continue
+        d = _finite_distances(sit, c)
+        z_hit = float(_hit_rows(sit, [c])[0] @ u)
+        for prob, log_l in ((mass - z_hit, f[0]), (z_hit, f[1])):  # P(h | p, F̄) · mass, log L_h
+            if not prob > 0:
+                continue
+            q = u * np.exp(log_l - log_l[u > 0].max())
+            q /= q.sum()
+            h_bits = float(entr(q).sum()) / np.log(2)
+            expected[k] += prob / mass * sa.value(float(q @ d), h_bits - phi_o_bits[k])
+    return sa.v_now - (1.0 - p_f[:, None]) * expected
 
 def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows, phi_o_bits=None) -> np.ndarray:
     """:func:`space_aware_gain` of ``cells`` with their P_f and found hypotheses (:func:`_found_mass`) and, if
@@ -596,6 +676,8 @@ def _choose_space_aware(sit: Situation) -> Decision:
     the first maximum in lattice order among the evaluated ones, the candidate :func:`space_aware_gain` would pick.
     """
     cells, drive, pred, tau = _candidates(sit)
+    if getattr(sit.beliefs.estimator, "reading_log_ratio", None) is not None:  # its own update: no bound
+        return _best(_score(sit, space_aware_gain(sit, cells), tau), cells, pred, drive, sit)
     sa = _SpaceAware(sit)
     p_f, rows = _found_mass(sit, cells)
     phi = _view_bits(sit, sa, cells)  # exact (the views are cached per position), used by both

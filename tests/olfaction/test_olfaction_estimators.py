@@ -234,6 +234,54 @@ def test_pmfs_uses_the_model_wind_when_the_reading_has_none():
     np.testing.assert_array_equal(a.posterior, b.posterior)
 
 
+def test_pmfs_reading_log_ratio_is_the_update_it_would_make():
+    """For a miss and a hit at new cells, compared cells and cells next to them, after readings with and without
+    wind and a "not found" factor: the log posterior after :meth:`update` minus the log posterior before equals
+    the predicted ratio plus one constant (the normalisation) on every free cell; the state is unchanged."""
+    occ, wind, outlets = _map(15)
+    model = PlumeModel(occ, resolution=H, wind=wind, outlets=outlets, diffusivity=0.03, lifetime=8.0)
+    pos, cells, hits, winds = _readings(occ, 12, 16)
+    pos[5], hits[4:6], winds[5] = pos[4], (False, False), np.nan  # a repeated miss at one stop, without wind
+    cond = np.where(np.random.default_rng(17).random(occ.shape) < 0.2, np.log(0.3), 0.0)
+
+    def replay():
+        e = PMFSEstimator.from_model(model, discrimination=0.8, tempering=0.4)
+        for p, h, w in zip(pos, hits, winds):
+            e.update(p, h, None if np.isnan(w).any() else w)
+        e.condition(cond)
+        return e
+
+    est = replay()
+    free = np.argwhere(~occ)
+    probe = np.concatenate([pos[[0, 4, 9]], (free[[3, 20, 41]][:, ::-1] + 0.5) * H])
+    before = est.log_posterior.copy()
+    ratio = est.reading_log_ratio(probe)
+    assert ratio.shape == (len(probe), 2) + occ.shape
+    np.testing.assert_array_equal(est.log_posterior, before)  # no state change
+    assert est.n_observations == len(pos)
+    for k, p in enumerate(probe):
+        for g in (False, True):
+            after = replay()
+            after.update(p, g)
+            d = after.log_posterior[~occ] - before[~occ] - ratio[k, int(g)][~occ]
+            np.testing.assert_allclose(d, d[0], rtol=0, atol=1e-12)
+        assert np.ptp(ratio[k, 0][~occ]) > 1e-3 and np.ptp(ratio[k, 1][~occ]) > 1e-3  # not a constant
+
+
+def test_pmfs_repeated_misses_at_one_stop_saturate():
+    """PMFS does not accumulate readings: after many misses at one stop one more moves the posterior (almost)
+    not at all — the factor whose expected effect the closed loop's φ_G must use."""
+    occ = np.zeros((8, 12), bool)
+    wind = np.zeros((8, 12, 2))
+    wind[..., 0] = 0.2
+    est = PMFSEstimator(occ, resolution=H, wind=wind, diffusivity=0.03, tempering=0.4)
+    spread = []
+    for _ in range(40):
+        spread.append(np.ptp(est.reading_log_ratio([(1.1, 1.1)])[0, 0]))
+        est.update((1.1, 1.1), False)
+    assert spread[-1] < 1e-3 * spread[0] and all(np.diff(spread) < 0)
+
+
 # --- construction paths ----------------------------------------------------------------------------------------------
 def test_from_grid_map_duck_types_and_from_model_shares_the_cache():
     occ, wind, outlets = _map(14)
