@@ -2,7 +2,7 @@
 
     python benchmarks/calibrate_olfaction.py            # prints the fit; the defaults of ExperimentConfig are it
 
-The tempering of both estimators is chosen for coverage on :data:`psgsl_pgm.experiment.COVERAGE_RUNS`
+The tempering of both estimators is chosen for coverage on :data:`psgsl_pgm.experiment.GRID_CALIBRATION_RUNS`
 (:func:`psgsl_pgm.experiment.coverage_tempering`); the AR(1) value is printed beside it.
 
 Runs the fixed tour on :data:`psgsl_pgm.experiment.CALIBRATION_RUNS` (seeds and sources never evaluated), fits
@@ -28,7 +28,7 @@ def main():
     print(f"PMFS score exponent λ (log score of the known sources) = {cal.pmfs_tempering:.4f}")
     for name, cov in (("Infotaxis β", cal.coverage), ("PMFS λ", cal.pmfs_coverage)):
         b = cov.thresholds.reshape(-1, 4)
-        print(f"{name} for coverage 0.90 of the 90 % region on COVERAGE_RUNS = {cov.tempering:.4f} (bootstrap over runs "
+        print(f"{name} for coverage 0.90 of the 90 % region on GRID_CALIBRATION_RUNS = {cov.tempering:.4f} (bootstrap over runs "
               f"5–95 %: {cov.interval[0]:.3f}–{cov.interval[1]:.3f}); coverage at ¼ ½ ¾ end "
               f"{[round(float(v), 3) for v in (b > cov.tempering).mean(axis=0)]}")
     data = calibration_runs(config=config)

@@ -74,6 +74,7 @@ def main():
     ap.add_argument("--fit", nargs="*", default=[])
     ap.add_argument("--evaluate", nargs="*", default=[])
     ap.add_argument("--before", default="0.298,0.380", help="Infotaxis β, PMFS λ before")
+    ap.add_argument("--sweep", default=None, help="comma-separated temperings: final coverage and area at each")
     ap.add_argument("--after", default=None, help="Infotaxis β, PMFS λ after (default: the fitted ones)")
     a = ap.parse_args()
     before = dict(zip(("infotaxis", "pmfs"), map(float, a.before.split(","))))
@@ -87,6 +88,13 @@ def main():
         recs = load(a.evaluate, est)
         if not recs or est not in after:
             continue
+        if a.sweep:
+            betas = [float(v) for v in a.sweep.split(",")]
+            res = [evaluate(recs, v) for v in betas]
+            print(f"\n{est}: final coverage / mean area m² at tempering " + ", ".join(f"{v:g}" for v in betas))
+            for key in sorted(res[0], key=lambda k: (k[0], VARIANTS.index(k[1]))):
+                print(f"| {key[0]} | {key[1]} | " + " | ".join(f"{r[key][0]['final']:.2f} / {r[key][1]:.1f}"
+                                                            for r in res) + " |")
         b, c = evaluate(recs, before[est]), evaluate(recs, after[est])
         print(f"\n{est}: before {before[est]:.3f} -> after {after[est]:.3f}  "
               "(coverage ¼ / ½ / ¾ / end, mean area m², median HPD level; n runs)")

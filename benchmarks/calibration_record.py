@@ -5,7 +5,8 @@
 
 Each (estimator, source, seed) runs the fixed tour with the experiment's own per-step code
 (:class:`psgsl_pgm.experiment.VariantPosteriors`; Infotaxis with the single fit (D, τ, κ) of
-:class:`ExperimentConfig`, or with ``--grid`` :data:`psgsl_pgm.experiment.PARAMETER_GRID`, whose middle row is that fit) and stores, at ¼, ½, ¾ of the run's
+:class:`ExperimentConfig`, or with ``--grid`` :data:`psgsl_pgm.experiment.PARAMETER_GRID`, whose middle row is
+that fit) and stores, at ¼, ½, ¾ of the run's
 time and at its end (:func:`psgsl_pgm.experiment._metrics.at_fractions`, as ``psgsl experiment`` does):
 
 * Infotaxis: the *untempered* accumulated log-likelihood Σ_k log P_θj(g_k | s) of every grid component j, (J, H·W);
@@ -50,7 +51,8 @@ def one_run(source, seed, estimator, config, *, semantics: bool, grid: bool):
             ell = est._loglik / est.tempering  # Σ_k log P_θj(g_k | s), untempered
         else:
             ell = est.score.ravel()[None, :]
-        sem = np.stack([beliefs.semantic(v).ravel() for v in VARIANTS[1:]]) if semantics else np.zeros((0, ell.shape[1]))
+        sem = (np.stack([beliefs.semantic(v).ravel() for v in VARIANTS[1:]]) if semantics
+               else np.zeros((0, ell.shape[1])))
         states.append((ell.copy(), sem, est.posterior.ravel().copy()))
         times.append(world.time - t0)
     steps = at_fractions(np.array(times), np.arange(len(times)), list(CALIBRATION_POINTS.values()))
@@ -85,7 +87,7 @@ def main():
     if a.calibration:
         jobs = [(src, seed) for seed, src in GRID_CALIBRATION_RUNS]
     else:
-        jobs = [(src, seed) for src in a.sources.split(";") for seed in range(a.first_seed, a.first_seed + a.seeds)]
+        jobs = [(src, seed) for seed in range(a.first_seed, a.first_seed + a.seeds) for src in a.sources.split(";")]
     os.makedirs(a.out, exist_ok=True)
     t0 = time.perf_counter()
     for est in a.estimators.split(","):

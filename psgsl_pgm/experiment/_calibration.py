@@ -50,9 +50,10 @@ from ._robot_models import wind_basis
 from ._run import walk
 from ._tour import exploration_tour
 
-__all__ = ["CALIBRATION_RUNS", "CHECKPOINTS", "COVERAGE_RUNS", "TUNING_SEEDS", "Calibration", "CoverageTempering", "GRID_AXES", "GRID_CALIBRATION_RUNS",
-           "calibrate", "calibrate_encounter_scale", "calibration_runs", "coverage_tempering", "coverage_threshold",
-           "coverage_thresholds", "parameter_grid_weights", "pmfs_tempering", "tempered_posterior"]
+__all__ = ["CALIBRATION_RUNS", "CHECKPOINTS", "COVERAGE_RUNS", "TUNING_SEEDS", "Calibration", "CoverageTempering",
+           "GRID_AXES", "GRID_CALIBRATION_RUNS", "calibrate", "calibrate_encounter_scale", "calibration_runs",
+           "coverage_tempering", "coverage_threshold", "coverage_thresholds", "parameter_grid_weights",
+           "pmfs_tempering", "tempered_posterior"]
 
 #: (seed, source) of the calibration runs: seeds and sources disjoint from the evaluation's (oven, bed, the floor
 #: point 5.0,6.0; seeds 0–999); two floor points in the bedrooms, where the dead-end rooms are.
@@ -67,10 +68,12 @@ GRID_CALIBRATION_RUNS = CALIBRATION_RUNS + tuple((seed + 8, src) for seed, src i
 #: Seeds of the evaluated sources used for tuning (never for reported results).
 TUNING_SEEDS = tuple(range(200, 220))
 
-#: (seed, source) of the runs on which the tempering is chosen for coverage (:func:`coverage_tempering`): the
-#: calibration runs, and the evaluated sources on the tuning seeds — the oven's stagnant corner and the
-#: bedroom's pooled gas, which no calibration source shows, are where a steady plume is most wrong.
-COVERAGE_RUNS = GRID_CALIBRATION_RUNS + tuple((seed, src) for src in ("oven", "bed", "5.0,6.0") for seed in TUNING_SEEDS)
+#: (seed, source) of a wider set of runs on which the tempering can be chosen for coverage
+#: (``calibrate(coverage_runs=COVERAGE_RUNS)``): the calibration runs, and the evaluated sources on the tuning
+#: seeds — the oven's stagnant corner and the bedroom's pooled gas, which no calibration source shows, are where
+#: a steady plume is most wrong.
+COVERAGE_RUNS = GRID_CALIBRATION_RUNS + tuple((seed, src) for src in ("oven", "bed", "5.0,6.0")
+                                              for seed in TUNING_SEEDS)
 
 #: The plume-parameter grid of :func:`parameter_grid_weights`: D (m²/s) a factor ≈ 3 either side of the
 #: maximum-likelihood 0.0131, τ at its 284 s (the likelihood is flat in τ by comparison), κ (m²/s) halved and
@@ -120,7 +123,7 @@ def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None =
 
 
 def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, grid_runs=GRID_CALIBRATION_RUNS,
-              coverage_runs=COVERAGE_RUNS, **fit_options) -> Calibration:
+              coverage_runs=GRID_CALIBRATION_RUNS, **fit_options) -> Calibration:
     """Fit (D, τ, κ), the tempering and the grid's weights on calibration runs (module docstring).
 
     Parameters
@@ -133,7 +136,8 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
         The runs of :func:`parameter_grid_weights` (default :data:`GRID_CALIBRATION_RUNS`); ``None`` skips it.
     coverage_runs : sequence of (int, str or (2,) array_like), or None, keyword-only
         The runs on which both estimators' tempering is chosen for coverage (:func:`coverage_tempering`;
-        default :data:`COVERAGE_RUNS`); ``None`` skips it.
+        default :data:`GRID_CALIBRATION_RUNS`, sources never evaluated; :data:`COVERAGE_RUNS` adds the evaluated
+        sources on the tuning seeds); ``None`` skips it.
     **fit_options
         Passed to :func:`psgsl_pgm.olfaction.fit_plume_parameters` (grids, ``refine``).
 
@@ -258,7 +262,7 @@ def pmfs_tempering(data, fit: PlumeFit) -> float:
 
 
 def tempered_posterior(log_prior, log_likelihoods, tempering: float, *, weights=None) -> np.ndarray:
-    """p(s | g) ∝ p(s) Σ_j π_j exp(β L_j(s)) from untempered accumulated log-likelihoods L_j (flat, exact in log space).
+    """p(s | g) ∝ p(s) Σ_j π_j exp(β L_j(s)) from untempered accumulated log-likelihoods L_j (flat, in log space).
 
     The posterior of :class:`psgsl_pgm.olfaction.GridInfotaxis` (L_j = Σ_k log P_θj(g_k | s), one row per
     component of its ``parameter_grid``, one row without) and of :class:`psgsl_pgm.olfaction.PMFSEstimator`
@@ -348,7 +352,8 @@ class CoverageTempering:
     interval: tuple
 
 
-def coverage_tempering(thresholds, groups, *, target: float = 0.9, n_boot: int = 2000, seed: int = 0) -> CoverageTempering:
+def coverage_tempering(thresholds, groups, *, target: float = 0.9, n_boot: int = 2000,
+                       seed: int = 0) -> CoverageTempering:
     """The learning rate (tempering) of a generalised posterior chosen so that its credible regions reach their
     nominal coverage on calibration runs with known sources (Syring & Martin 2019, Biometrika 106, 479).
 
