@@ -424,6 +424,12 @@ def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: 
     :class:`psgsl_pgm.olfaction.GridInfotaxis` with β = 1, whose accumulated log-likelihood is then
     L_j(s) = Σ_k log P_θj(g_k | s) per component (``parameter_grid``: rows (D, τ, κ, weight); None: the fit), for
     ``"pmfs"`` :class:`psgsl_pgm.olfaction.PMFSEstimator`'s untempered score S(s).
+
+    The wind is the run's estimate from *all* of its readings (hindsight) and the prior covers every free cell;
+    the experiment's estimator starts from a few anemometer readings and the source region's prior, so its early
+    posteriors are wronger and its thresholds at ¼ and ½ lower (on run (1000, toilet): 0.15 and 0.16 against
+    ≥ 10 here). ``benchmarks/calibration_record.py`` records the experiment's own per-step code for
+    ``benchmarks/calibration_coverage.py``, which chooses the tempering from those records.
     """
     from ..olfaction import GridInfotaxis
 
