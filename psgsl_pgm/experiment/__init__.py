@@ -15,8 +15,10 @@ resumable); :func:`run_demo` the command ``psgsl demo``.
 """
 
 from ..sim._house_ontology import house_ontology
-from ._calibration import (CALIBRATION_RUNS, GRID_AXES, GRID_CALIBRATION_RUNS, Calibration, calibrate,
-                           calibrate_encounter_scale, calibration_runs, parameter_grid_weights)
+from ._calibration import (CALIBRATION_RUNS, COVERAGE_RUNS, GRID_AXES, GRID_CALIBRATION_RUNS, Calibration,
+                           CoverageTempering, calibrate, calibrate_encounter_scale, calibration_runs,
+                           coverage_tempering, coverage_threshold, coverage_thresholds, parameter_grid_weights,
+                           tempered_posterior)
 from ._config import ESTIMATORS, PARAMETER_GRID, VARIANTS, ExperimentConfig, parse_source
 from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
@@ -32,6 +34,8 @@ from ._tour import Tour, exploration_tour
 
 __all__ = [
     "CALIBRATION_RUNS",
+    "COVERAGE_RUNS",
+    "CoverageTempering",
     "GRID_AXES",
     "GRID_CALIBRATION_RUNS",
     "Calibration",
@@ -48,6 +52,9 @@ __all__ = [
     "calibrate_encounter_scale",
     "calibration_runs",
     "check_sources",
+    "coverage_tempering",
+    "coverage_threshold",
+    "coverage_thresholds",
     "error_and_spread",
     "exploration_tour",
     "format_table",
@@ -66,6 +73,7 @@ __all__ = [
     "run_experiment",
     "run_search",
     "save_run",
+    "tempered_posterior",
     "summarize",
     "visit",
     "write_outputs",

@@ -50,8 +50,10 @@ from ._robot_models import wind_basis
 from ._run import walk
 from ._tour import exploration_tour
 
-__all__ = ["CALIBRATION_RUNS", "Calibration", "GRID_AXES", "GRID_CALIBRATION_RUNS", "calibrate",
-           "calibrate_encounter_scale", "calibration_runs", "parameter_grid_weights", "pmfs_tempering"]
+__all__ = ["CALIBRATION_RUNS", "CHECKPOINTS", "COVERAGE_RUNS", "TUNING_SEEDS", "Calibration", "CoverageTempering",
+           "GRID_AXES", "GRID_CALIBRATION_RUNS", "calibrate", "calibrate_encounter_scale", "calibration_runs",
+           "coverage_tempering", "coverage_threshold", "coverage_thresholds", "parameter_grid_weights",
+           "pmfs_tempering", "tempered_posterior"]
 
 #: (seed, source) of the calibration runs: seeds and sources disjoint from the evaluation's (oven, bed, the floor
 #: point 5.0,6.0; seeds 0–999); two floor points in the bedrooms, where the dead-end rooms are.
@@ -63,6 +65,16 @@ CALIBRATION_RUNS = ((1000, "toilet"), (1001, "couch"), (1002, "tv"), (1003, "ref
 GRID_CALIBRATION_RUNS = CALIBRATION_RUNS + tuple((seed + 8, src) for seed, src in CALIBRATION_RUNS) + (
     (1016, "2.5,6.0"), (1017, "7.5,6.0"), (1018, "2.5,6.0"), (1019, "7.5,6.0"))
 
+#: Seeds of the evaluated sources used for tuning (never for reported results).
+TUNING_SEEDS = tuple(range(200, 220))
+
+#: (seed, source) of a wider set of runs on which the tempering can be chosen for coverage
+#: (``calibrate(coverage_runs=COVERAGE_RUNS)``): the calibration runs, and the evaluated sources on the tuning
+#: seeds — the oven's stagnant corner and the bedroom's pooled gas, which no calibration source shows, are where
+#: a steady plume is most wrong.
+COVERAGE_RUNS = GRID_CALIBRATION_RUNS + tuple((seed, src) for src in ("oven", "bed", "5.0,6.0")
+                                              for seed in TUNING_SEEDS)
+
 #: The plume-parameter grid of :func:`parameter_grid_weights`: D (m²/s) a factor ≈ 3 either side of the
 #: maximum-likelihood 0.0131, τ at its 284 s (the likelihood is flat in τ by comparison), κ (m²/s) halved and
 #: doubled around 0.821 (κ costs no plume solve).
@@ -73,8 +85,9 @@ GRID_AXES = {"diffusivity": (0.004, 0.0131, 0.04), "lifetime": (284.0,), "encoun
 class Calibration:
     """The fitted hit model: ``plume`` (D, τ, κ, log-likelihood), the residuals' pooled lag-1 autocorrelation
     ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the PMFS score exponent ``pmfs_tempering``, the
-    number of readings ``n``, and ``parameter_grid``, the rows (D, τ, κ, weight) of the grid Infotaxis
-    marginalises over (None when not fitted)."""
+    number of readings ``n``, ``parameter_grid``, the rows (D, τ, κ, weight) of the grid Infotaxis
+    marginalises over (None when not fitted), and ``coverage`` / ``pmfs_coverage``, the
+    :class:`CoverageTempering` of Infotaxis (single fit) and PMFS on the calibration runs (None when not fitted)."""
 
     plume: PlumeFit
     rho: float
@@ -82,6 +95,8 @@ class Calibration:
     pmfs_tempering: float
     n: int
     parameter_grid: tuple | None = None
+    coverage: "CoverageTempering | None" = None
+    pmfs_coverage: "CoverageTempering | None" = None
 
 
 def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> list:
@@ -108,7 +123,7 @@ def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None =
 
 
 def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, grid_runs=GRID_CALIBRATION_RUNS,
-              **fit_options) -> Calibration:
+              coverage_runs=GRID_CALIBRATION_RUNS, **fit_options) -> Calibration:
     """Fit (D, τ, κ), the tempering and the grid's weights on calibration runs (module docstring).
 
     Parameters
@@ -119,6 +134,10 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
         ε, warm-up and robot timing; its plume parameters and tempering are ignored.
     grid_runs : sequence of (int, str or (2,) array_like), or None, keyword-only
         The runs of :func:`parameter_grid_weights` (default :data:`GRID_CALIBRATION_RUNS`); ``None`` skips it.
+    coverage_runs : sequence of (int, str or (2,) array_like), or None, keyword-only
+        The runs on which both estimators' tempering is chosen for coverage (:func:`coverage_tempering`;
+        default :data:`GRID_CALIBRATION_RUNS`, sources never evaluated; :data:`COVERAGE_RUNS` adds the evaluated
+        sources on the tuning seeds); ``None`` skips it.
     **fit_options
         Passed to :func:`psgsl_pgm.olfaction.fit_plume_parameters` (grids, ``refine``).
 
@@ -130,15 +149,25 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     data = calibration_runs(runs, config=config)
     fit = fit_plume_parameters(data, false_hit_rate=config.false_hit_rate, **fit_options)
     rho, beta = ar1_tempering(hit_residuals(data, fit, false_hit_rate=config.false_hit_rate))
+    known = dict(zip(((int(s), str(src)) for s, src in runs), data))
+
+    def runs_of(pairs):  # each (seed, source) walked once
+        todo = [(int(s), str(src)) for s, src in pairs if (int(s), str(src)) not in known]
+        known.update(zip(todo, calibration_runs(todo, config=config) if todo else []))
+        return [known[(int(s), str(src))] for s, src in pairs]
+
     grid = None
     if grid_runs is not None:
-        known = dict(zip(((int(s), str(src)) for s, src in runs), data))
-        grid_data = [known.get((int(s), str(src))) for s, src in grid_runs]
-        todo = [(s, src) for (s, src), d in zip(grid_runs, grid_data) if d is None]
-        more = iter(calibration_runs(todo, config=config) if todo else [])
-        grid_data = [d if d is not None else next(more) for d in grid_data]
-        grid = parameter_grid_weights(grid_data, tempering=beta, false_hit_rate=config.false_hit_rate)
-    return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)), grid)
+        grid = parameter_grid_weights(runs_of(grid_runs), tempering=beta, false_hit_rate=config.false_hit_rate)
+    cover = {}
+    if coverage_runs is not None:
+        runs_c = runs_of(coverage_runs)
+        labels = np.repeat(np.arange(len(runs_c)), len(CHECKPOINTS))
+        for name in ("infotaxis", "pmfs"):
+            th = coverage_thresholds(runs_c, fit, name, false_hit_rate=config.false_hit_rate)
+            cover[name] = coverage_tempering(th.ravel(), labels)
+    return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)), grid,
+                       cover.get("infotaxis"), cover.get("pmfs"))
 
 
 def parameter_grid_weights(data, *, tempering: float, false_hit_rate: float, axes=None, drop: float = 1e-3) -> tuple:
@@ -230,3 +259,201 @@ def pmfs_tempering(data, fit: PlumeFit) -> float:
                 priors.append(est._log_prior)
                 truth.append(r * model.shape[1] + c)
     return score_tempering(scores, priors, truth)
+
+
+def tempered_posterior(log_prior, log_likelihoods, tempering: float, *, weights=None) -> np.ndarray:
+    """p(s | g) ∝ p(s) Σ_j π_j exp(β L_j(s)) from untempered accumulated log-likelihoods L_j (flat, in log space).
+
+    The posterior of :class:`psgsl_pgm.olfaction.GridInfotaxis` (L_j = Σ_k log P_θj(g_k | s), one row per
+    component of its ``parameter_grid``, one row without) and of :class:`psgsl_pgm.olfaction.PMFSEstimator`
+    (one row, L = the PMFS score S(s), β = λ) at any tempering.
+
+    Parameters
+    ----------
+    log_prior : (N,) array_like of float
+        log p(s), −inf off the support.
+    log_likelihoods : (J, N) or (N,) array_like of float
+        L_j(s), untempered.
+    tempering : float
+        β > 0.
+    weights : (J,) array_like of float, optional, keyword-only
+        π_j ≥ 0 (normalised here); default: equal.
+
+    Returns
+    -------
+    (N,) ndarray of float64
+        Sums to 1; 0 off the support.
+    """
+    from scipy.special import logsumexp
+
+    lp = np.asarray(log_prior, dtype=np.float64).ravel()
+    ell = np.asarray(log_likelihoods, dtype=np.float64)
+    ell = ell.reshape(1, -1) if ell.ndim == 1 else ell
+    if ell.ndim != 2 or ell.shape[1] != lp.size:
+        raise ValueError(f"log_likelihoods must be (J, N) with N = {lp.size} like log_prior, got shape {ell.shape}")
+    if not tempering > 0:
+        raise ValueError(f"tempering must be positive, got {tempering!r}")
+    w = np.full(ell.shape[0], 1.0) if weights is None else np.asarray(weights, dtype=np.float64).ravel()
+    if w.shape != (ell.shape[0],) or (w < 0).any() or not w.sum() > 0:
+        raise ValueError(f"weights must be {ell.shape[0]} non-negative values with a positive sum, got {weights!r}")
+    with np.errstate(divide="ignore"):
+        a = tempering * ell
+        a = a[0] if ell.shape[0] == 1 else logsumexp(np.log(w / w.sum())[:, None] + a, axis=0)
+        a = lp + a
+    a -= logsumexp(a)
+    return np.exp(a)
+
+
+def coverage_threshold(log_prior, log_likelihoods, true_cell: int, *, level: float = 0.9, weights=None,
+                       bounds=(1e-4, 10.0), iterations: int = 60) -> float:
+    """β* of one calibration posterior: its ``level`` credible region holds the true cell for β below β*, not above.
+
+    For one component and a prior uniform on its support, the cells more probable than the true cell t are
+    {c : L(c) > L(t)} whatever β, and the posterior mass of that upper set of L grows with β
+    (d/dβ E_β[1{L > L(t)}] = Cov_β(1{L > L(t)}, L) ≥ 0): the region
+    (:func:`~psgsl_pgm.experiment._metrics.credible_region`) holds t exactly for β below one threshold, found by
+    bisection on log β. With several components (a ``parameter_grid``) or a non-uniform prior the indicator is
+    not proved monotone; the bisection then finds one crossing, and :func:`coverage_tempering` reports the
+    coverage actually reached.
+
+    Returns
+    -------
+    float
+        β* in [bounds[0], bounds[1]]: ``bounds[0]`` when t is outside the region already there, ``bounds[1]``
+        when it is still inside there.
+    """
+    from ._metrics import credible_region
+
+    def covered(beta):
+        return bool(credible_region(tempered_posterior(log_prior, log_likelihoods, beta, weights=weights),
+                                    level).ravel()[true_cell])
+
+    lo, hi = (float(np.log(b)) for b in bounds)
+    if covered(np.exp(hi)):
+        return float(bounds[1])
+    if not covered(np.exp(lo)):
+        return float(bounds[0])
+    for _ in range(int(iterations)):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if covered(np.exp(mid)) else (lo, mid)
+    return float(np.exp(0.5 * (lo + hi)))
+
+
+@dataclass(frozen=True)
+class CoverageTempering:
+    """The tempering chosen for coverage: ``tempering`` (β̂), the per-item thresholds ``thresholds`` (β*_i) and
+    their run labels ``groups``, the calibration coverage reached at β̂ ``coverage``, and ``interval``, the
+    5–95 % bootstrap interval of β̂ over runs."""
+
+    tempering: float
+    thresholds: np.ndarray
+    groups: np.ndarray
+    coverage: float
+    interval: tuple
+
+
+def coverage_tempering(thresholds, groups, *, target: float = 0.9, n_boot: int = 2000,
+                       seed: int = 0) -> CoverageTempering:
+    """The learning rate (tempering) of a generalised posterior chosen so that its credible regions reach their
+    nominal coverage on calibration runs with known sources (Syring & Martin 2019, Biometrika 106, 479).
+
+    A posterior built on a misspecified model (a steady plume for a gas that meanders, eddies and pools) is
+    over-confident however its readings' correlation is accounted for: the AR(1) rule of
+    :func:`psgsl_pgm.olfaction.ar1_tempering` corrects the *variance* of an otherwise correct likelihood, not its
+    bias. Syring & Martin choose the learning rate so that the generalised posterior's credible region has its
+    nominal frequentist coverage, estimating coverage by bootstrap; with calibration runs whose source is known,
+    coverage can be counted directly. Each calibration posterior i (a run at ¼, ½, ¾ and the end of its tour) has
+    a threshold β*_i (:func:`coverage_threshold`): its region holds the source for β < β*_i. The coverage
+    at β is the fraction of β*_i above β — a step function falling in β — so the largest β with coverage ≥
+    ``target`` is the k-th largest threshold, k = ⌈target · n⌉; β̂ is the geometric midpoint of the k-th and
+    (k+1)-th largest (coverage exactly k/n there).
+
+    The estimate's own uncertainty: β̂ is an empirical quantile of correlated thresholds (four per run), so its
+    spread is estimated by resampling *runs* (``groups``) with replacement (seeded); the 5–95 % interval is
+    reported, not used: β̂ aims at the middle of the acceptable band of coverage rather than at an edge.
+
+    Parameters
+    ----------
+    thresholds : (n,) array_like of float
+        β*_i > 0.
+    groups : (n,) array_like
+        The run of each threshold (bootstrap unit).
+    target : float, keyword-only
+        Nominal coverage in (0, 1).
+    n_boot : int, keyword-only
+    seed : int, keyword-only
+
+    Returns
+    -------
+    CoverageTempering
+    """
+    b = np.asarray(thresholds, dtype=np.float64).ravel()
+    g = np.asarray(groups).ravel()
+    if b.size < 2 or g.shape != b.shape or not (np.isfinite(b).all() and (b > 0).all()):
+        raise ValueError(f"thresholds must be at least 2 positive finite values with one group each, got {b.size} "
+                         f"thresholds and {g.size} groups")
+    if not 0 < target < 1:
+        raise ValueError(f"target must lie in (0, 1), got {target!r}")
+
+    def pick(x):
+        s = np.sort(x)[::-1]
+        k = min(int(np.ceil(target * s.size - 1e-12)), s.size - 1)
+        return float(np.sqrt(s[k - 1] * s[k])) if k >= 1 else float(s[0])
+
+    beta = pick(b)
+    labels = np.unique(g)
+    members = [np.flatnonzero(g == u) for u in labels]
+    rng = np.random.default_rng(seed)
+    boot = [pick(b[np.concatenate([members[i] for i in rng.integers(0, len(labels), len(labels))])])
+            for _ in range(int(n_boot))]
+    lo, hi = np.quantile(boot, [0.05, 0.95])
+    return CoverageTempering(beta, b, g, float((b > beta).mean()), (float(lo), float(hi)))
+
+
+#: Fractions of a calibration run's readings at which its posterior is scored (as the experiment's coverage).
+CHECKPOINTS = (0.25, 0.5, 0.75, 1.0)
+
+
+def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: float = 0.01, level: float = 0.9,
+                        parameter_grid=None) -> np.ndarray:
+    """(len(data), 4) thresholds β*_ri (:func:`coverage_threshold`) of each calibration run's posterior at ¼, ½, ¾
+    and the end of its readings (:data:`CHECKPOINTS`).
+
+    The estimator is replayed untempered on each run's readings (its plume with the fitted (D, τ, κ) and the
+    run's estimated wind, a uniform prior over the free cells, as :func:`pmfs_tempering`): for ``"infotaxis"``
+    :class:`psgsl_pgm.olfaction.GridInfotaxis` with β = 1, whose accumulated log-likelihood is then
+    L_j(s) = Σ_k log P_θj(g_k | s) per component (``parameter_grid``: rows (D, τ, κ, weight); None: the fit), for
+    ``"pmfs"`` :class:`psgsl_pgm.olfaction.PMFSEstimator`'s untempered score S(s).
+
+    The wind is the run's estimate from *all* of its readings (hindsight) and the prior covers every free cell;
+    the experiment's estimator starts from a few anemometer readings and the source region's prior, so its early
+    posteriors are wronger and its thresholds at ¼ and ½ lower (on run (1000, toilet): 0.15 and 0.16 against
+    ≥ 10 here). ``benchmarks/calibration_record.py`` records the experiment's own per-step code for
+    ``benchmarks/calibration_coverage.py``, which chooses the tempering from those records.
+    """
+    from ..olfaction import GridInfotaxis
+
+    if estimator not in ("infotaxis", "pmfs"):
+        raise ValueError(f"estimator must be 'infotaxis' or 'pmfs', got {estimator!r}")
+    out = []
+    for run in data:
+        model = _fitted_model(run, fit.diffusivity, fit.lifetime, fit.encounter_scale)
+        if estimator == "infotaxis":
+            est = GridInfotaxis.from_model(model, tempering=1.0, false_hit_rate=false_hit_rate,
+                                           parameter_grid=parameter_grid)
+            weights = None if parameter_grid is None else est.parameter_grid[:, 3]
+        else:
+            est = PMFSEstimator.from_model(model, tempering=1.0)
+            weights = None
+        r, c = model.cell_of(run.source)
+        n = len(run.hits)
+        keep = [int(round(f * n)) for f in CHECKPOINTS]
+        row = []
+        for j in range(n):
+            est.update(run.positions[j], bool(run.hits[j]), None if run.winds is None else run.winds[j])
+            for _ in range(keep.count(j + 1)):
+                ell = est._loglik.copy() if estimator == "infotaxis" else est.score.ravel()
+                row.append(coverage_threshold(est._log_prior, ell, r * model.shape[1] + c, level=level,
+                                              weights=weights))
+        out.append(row)
+    return np.array(out, dtype=np.float64)
