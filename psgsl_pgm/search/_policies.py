@@ -730,24 +730,27 @@ _STUCK = "semantic-modes: modes out of reach"  # Situation.cache key: flat cells
 
 
 def _semantic_step(sit: Situation) -> Decision:
-    """``semantic-modes``: to the drivable cell nearest the mode when it is within the horizon (the found rule is
-    a distance to it), else towards the mode as ``greedy``. A mode that stands after the robot reached that cell
-    cannot be visited more closely: every cell whose nearest drivable cell is the robot's is set aside for the run
-    (kept in ``sit.cache``), and the next mode is the target."""
+    """``semantic-modes``: to the reachable drivable cell nearest the mode (the found rule is a distance to it;
+    a drivable cell in another component of the free space cannot be driven to), directly when it is within the
+    horizon, else towards it as ``greedy``. A mode that stands after the robot reached that cell cannot be
+    visited more closely: the mode and every cell whose nearest drivable cell is the robot's are set aside for the
+    run (kept in ``sit.cache``), and the next mode is the target."""
     space = sit.space
+    reachable = np.flatnonzero(space.nav.ravel() & np.isfinite(space.distances(sit.cell)))  # the robot's component
     for _ in range(8):  # a handful of set-asides per decision at most; then drive on regardless
         target = semantic_mode(sit)
-        goal = space.snap(space.position(target))
+        gap = ((space.centres[reachable] - space.centres[target]) ** 2).sum(axis=1)
+        goal = int(reachable[int(np.argmin(gap))])  # first minimum: the lowest flat index among equals
         if goal != sit.cell:
             break
         near = np.flatnonzero(space._nearest_nav == sit.cell)
-        sit.cache[_STUCK] = np.union1d(sit.cache.get(_STUCK, np.zeros(0, np.int64)), near)
+        sit.cache[_STUCK] = np.union1d(sit.cache.get(_STUCK, np.zeros(0, np.int64)), np.append(near, target))
     dist, pred = space.reach(sit.cell, sit.horizon)
     if goal != sit.cell and np.isfinite(dist[goal]):
         to = space.position(target) - space.position(goal)
         heading = float(np.arctan2(to[1], to[0])) if np.hypot(*to) > 0 else sit.heading
         return Decision(int(goal), (heading,), space.path(pred, int(goal)), float(dist[goal]), 0.0)
-    return _towards(sit, target)
+    return _towards(sit, goal)
 
 
 def choose(policy: str, sit: Situation) -> Decision:
