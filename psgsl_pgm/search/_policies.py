@@ -696,13 +696,25 @@ def _choose_space_aware(sit: Situation) -> Decision:
     return _best(score, cells, pred, drive, sit)
 
 
+def _reachable_nearest(sit: Situation, target: int) -> int:
+    """The drivable cell nearest (straight line) to the flat cell ``target`` among those the robot can drive to:
+    the nearest drivable cell of the whole map may lie in another component of the free space (a pocket behind
+    furniture), and a robot steering towards it never arrives. First minimum: the lowest flat index among equals."""
+    space = sit.space
+    reachable = np.flatnonzero(space.nav.ravel() & np.isfinite(space.distances(sit.cell)))
+    gap = ((space.centres[reachable] - space.centres[target]) ** 2).sum(axis=1)
+    return int(reachable[int(np.argmin(gap))])
+
+
 def _towards(sit: Situation, target: int) -> Decision:
     """The candidate within the horizon nearest (geodesic) to the flat cell ``target``, then the quickest, with the
     camera towards the target (``greedy``, ``semantic-modes``)."""
     cells, drive, pred, tau = _candidates(sit, far=False)  # towards the target, re-planned within the horizon
-    # geodesic distance from each candidate to the target cell (symmetric graph: one Dijkstra from the target's
-    # nearest drivable cell, then straight to the target cell, as FreeSpace.distances)
-    d_target = sit.space.distances(sit.space.snap(sit.space.position(target)))[cells] + sit.space.offset(target)
+    # geodesic distance from each candidate to the target cell (symmetric graph: one Dijkstra from the reachable
+    # drivable cell nearest the target, then straight to the target cell)
+    goal = _reachable_nearest(sit, target)
+    straight = float(np.linalg.norm(sit.space.centres[target] - sit.space.centres[goal]))
+    d_target = sit.space.distances(goal)[cells] + straight
     rank = np.lexsort((tau.min(axis=1), d_target))  # nearest to the target cell, then quickest
     k = int(rank[0])
     to = sit.space.position(target) - sit.space.position(cells[k])
@@ -736,11 +748,9 @@ def _semantic_step(sit: Situation) -> Decision:
     visited more closely: the mode and every cell whose nearest drivable cell is the robot's are set aside for the
     run (kept in ``sit.cache``), and the next mode is the target."""
     space = sit.space
-    reachable = np.flatnonzero(space.nav.ravel() & np.isfinite(space.distances(sit.cell)))  # the robot's component
     for _ in range(8):  # a handful of set-asides per decision at most; then drive on regardless
         target = semantic_mode(sit)
-        gap = ((space.centres[reachable] - space.centres[target]) ** 2).sum(axis=1)
-        goal = int(reachable[int(np.argmin(gap))])  # first minimum: the lowest flat index among equals
+        goal = _reachable_nearest(sit, target)
         if goal != sit.cell:
             break
         near = np.flatnonzero(space._nearest_nav == sit.cell)

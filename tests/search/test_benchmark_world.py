@@ -34,10 +34,11 @@ def test_benchmark_on_the_lab_house(tmp_path):
     assert bare.ontology.rooms == () and bare.ontology.classes == load_world(world).ontology.classes
 
 
-def test_semantic_modes_drives_to_a_reachable_cell_nearest_each_mode(tmp_path):
-    """House B's microwave, seed 1: a mode of p(s | z) whose nearest drivable cell lies in another component of
-    the free space. Driving towards that cell had the robot shuttle between two stops until the budget; the
-    reachable drivable cell nearest the mode is a stop it can reach, and the search finds the microwave."""
+@pytest.mark.parametrize(("policy", "seed"), [("semantic-modes", 1), ("greedy", 3)])
+def test_target_policies_drive_to_a_reachable_cell_nearest_their_target(tmp_path, policy, seed):
+    """House B's microwave: a target (a mode of p(s | z), the MAP cell) whose nearest drivable cell lies in another
+    component of the free space. Steering towards that cell had the robot shuttle between two stops until the
+    budget; the reachable drivable cell nearest the target is a stop it can reach, and it finds the microwave."""
     from psgsl_pgm.runs._key import digest, world_key
     from psgsl_pgm.search import SearchConfig
     from psgsl_pgm.search._grid import closed_loop_in_world
@@ -46,7 +47,7 @@ def test_semantic_modes_drives_to_a_reachable_cell_nearest_each_mode(tmp_path):
     world = write_real_world(tmp_path)
     house = load_world(world).house(0)
     microwave = next(o for o in house.objects if o.name == "microwave_1")
-    run = closed_loop_in_world(tuple(microwave.center), 1, "semantic-modes", "semantics+rooms", "infotaxis",
+    run = closed_loop_in_world(tuple(microwave.center), seed, policy, "semantics+rooms", "infotaxis",
                                world=str(world), world_digest=digest(world_key(world)),
                                search=SearchConfig(time_budget=300.0))
     assert run.found and run.time_to_find < 300.0
