@@ -417,7 +417,7 @@ CHECKPOINTS = (0.25, 0.5, 0.75, 1.0)
 def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: float = 0.01, level: float = 0.9,
                         parameter_grid=None) -> np.ndarray:
     """(len(data), 4) thresholds β*_ri (:func:`coverage_threshold`) of each calibration run's posterior at ¼, ½, ¾
-    and the end of its readings (:data:`CHECKPOINTS`).
+    and the end of its readings (``CHECKPOINTS`` of this module).
 
     The estimator is replayed untempered on each run's readings (its plume with the fitted (D, τ, κ) and the
     run's estimated wind, a uniform prior over the free cells, as :func:`pmfs_tempering`): for ``"infotaxis"``
