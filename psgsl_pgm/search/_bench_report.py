@@ -137,7 +137,8 @@ def _figures(out: Path, stats: dict, conditions) -> list:
     files = []
     arms = sorted(dict.fromkeys(a for c in conditions for a in stats[c]), key=_arm_order)
     colour = {a: f"C{i % 10}" for i, a in enumerate(arms)}  # one colour per arm in every panel
-    fig, axes = plt.subplots(1, len(conditions), figsize=(5 * len(conditions), 4), squeeze=False, sharey=True)
+    fig, axes = plt.subplots(1, len(conditions), figsize=(5 * len(conditions), 4.6), squeeze=False, sharey=True,
+                             layout="constrained")
     for ax, c in zip(axes[0], conditions):
         for arm, s in stats[c].items():
             ax.step(s["km"]["t"], s["km"]["survival"], where="post", label=arm, color=colour[arm])
@@ -145,8 +146,8 @@ def _figures(out: Path, stats: dict, conditions) -> list:
         ax.set_xlabel("time (s)")
         ax.set_ylim(0, 1.02)
     axes[0][0].set_ylabel("P(not found by t)")
-    axes[0][0].legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
+    handles = [plt.Line2D([], [], color=colour[a]) for a in arms]  # below the panels: no curve hidden
+    fig.legend(handles, arms, loc="outside lower center", ncols=min(len(arms), 4), fontsize=8, frameon=False)
     fig.savefig(out / "survival.png", dpi=110)
     plt.close(fig)
     files.append("survival.png")

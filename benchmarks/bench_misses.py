@@ -1,0 +1,101 @@
+"""Why the closed-loop runs of a benchmark folder that did not find their source missed it.
+
+For every run of the chosen policies that did not find its source, from the run's stops and final belief
+(``position``, ``final_posterior`` of ``runs/*.npz``) and the home's geometry:
+
+* **limit cycle** — the last 30 stops lie at three positions or fewer;
+* **P_f reachable** — the largest probability of finding the source, P_f(p) = (1 − m) Σ_{c found at p} p(c)
+  (:class:`psgsl_pgm.search.DetectionModel`), over every drivable cell reachable from the last stop;
+* **P_f candidates** — the same over the candidates of the last decision (:meth:`FreeSpace.candidates` with
+  the finder cells of :meth:`FreeSpace.cover`, the default :class:`psgsl_pgm.search.SearchConfig`);
+* **V_now** — space-aware infotaxis's value at the last stop, log₂(D/ℓ + 2^{max(H − disc, 0) − 1} − ½) with D
+  the expected geodesic distance to the source, ℓ = 2 r, H the entropy in bits and disc the bits of one found
+  disc (``psgsl_pgm.search._policies``), negative when the belief lies within one found diameter.
+
+A run counts as *blind* when some reachable cell would find more than half of the belief's mass while no
+candidate finds more than 0.1 of it, and as *refused* when a candidate would find at least half of it.
+
+Usage::
+
+    python benchmarks/bench_misses.py bench-50x5                       # generated homes (OUT/houses/*/world.yaml)
+    python benchmarks/bench_misses.py bench-B --world house_B/world.yaml  # one world file
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+from pathlib import Path
+
+import numpy as np
+from scipy.special import entr
+
+from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig
+from psgsl_pgm.sim import Camera, load_world
+
+CYCLE_STOPS = 30  # the stops a limit cycle is judged on
+CYCLE_POSITIONS = 3  # at most this many distinct positions among them
+
+
+def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: SearchConfig) -> dict:
+    """The measures of the module docstring for one run that did not find its source."""
+    z = np.load(npz)
+    post = z["final_posterior"].ravel()
+    stops = z["position"][:, :2]
+    last = space.snap(stops[-1])
+    dist = space.distances(last)
+    reach = np.flatnonzero(space.nav.ravel() & np.isfinite(dist))
+    pf_reach = detection.rows(space.centres[reach]) @ post * (1.0 - detection.miss_probability)
+    cells, _, _ = space.candidates(last, search.horizon, search.far_spacing)
+    pf_cand = detection.rows(space.centres[cells]) @ post * (1.0 - detection.miss_probability)
+    ok = np.isfinite(dist)
+    ell = 2.0 * search.found_radius
+    disc = np.log2(np.pi * search.found_radius**2 / space.resolution**2)
+    h_bits = float(entr(post).sum() / np.log(2))
+    arg = float(post[ok] @ dist[ok]) / ell + 2.0 ** (max(h_bits - disc, 0.0) - 1.0) - 0.5
+    positions = {tuple(np.round(p, 3)) for p in stops[-CYCLE_STOPS:]}
+    return {
+        "cycle": len(positions) <= CYCLE_POSITIONS,
+        "pf_reach": float(pf_reach.max()),
+        "pf_cand": float(pf_cand.max()),
+        "v_now": float(np.log2(arg)) if arg > 0 else float("-inf"),
+    }
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", type=Path, help="a psgsl benchmark output folder")
+    ap.add_argument("--world", type=Path, help="the world file of a one-world benchmark (default: OUT/houses)")
+    ap.add_argument("--policies", nargs="+", default=["infotaxis", "space-aware-infotaxis"])
+    args = ap.parse_args(argv)
+    search = SearchConfig()
+    geometry = {}
+    counts = collections.Counter()
+    for npz in sorted((args.out / "runs").glob("*.npz")):
+        home, condition, policy, variant = npz.name.split("__")[:4]
+        if policy not in args.policies or bool(np.load(npz)["found"]):
+            continue
+        if home not in geometry:
+            world = args.world if args.world is not None else args.out / "houses" / home / "world.yaml"
+            house = load_world(world).house()
+            space = FreeSpace(house, Camera(), clearance=search.clearance, spacing=search.spacing,
+                              n_headings=search.n_headings)
+            detection = DetectionModel.from_house(house, search.found_radius,
+                                                  miss_probability=search.miss_probability)
+            space.cover(detection)
+            geometry[home] = space, detection
+        m = classify(npz, *geometry[home], search)
+        kind = ("refused" if m["pf_cand"] >= 0.5 else
+                "blind" if m["pf_reach"] > 0.5 and m["pf_cand"] <= 0.1 else "spread")
+        counts[policy, "limit cycle" if m["cycle"] else "moving", kind] += 1
+        if m["v_now"] < 0:
+            counts[policy, "V_now < 0", kind] += 1
+        print(f"{npz.stem}: cycle {m['cycle']}, P_f reachable {m['pf_reach']:.3f}, candidates {m['pf_cand']:.3f}, "
+              f"V_now {m['v_now']:.2f}")
+    print("\n| policy | end | belief | runs |\n|---|---|---|---|")
+    for (policy, end, kind), n in sorted(counts.items()):
+        print(f"| {policy} | {end} | {kind} | {n} |")
+
+
+if __name__ == "__main__":
+    main()
