@@ -22,11 +22,13 @@ from ._grid import (
     MAX_SEEDS,
     MAX_WORKERS,
     add_scheduler_argument,
+    add_world_arguments,
     interrupted,
     positive_int,
     seed_count,
     seed_range,
     worker_count,
+    world_sources,
 )
 from ._usage import UsageError as _UsageError
 
@@ -85,22 +87,12 @@ def _demo(args) -> int:
 
 
 def _experiment(args) -> int:
-    from ..experiment import ExperimentConfig, check_sources, format_table, parse_source, run_experiment
+    from ..experiment import ExperimentConfig, check_sources, format_table, run_experiment
     from ..io._output import check_output_dir
     from ..runs._runner import GridInterrupted
 
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
-    spec = None
-    if args.world is not None:
-        from ..sim import load_world
-
-        spec = load_world(args.world)
-    names = args.sources
-    if names is None:
-        names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
-        if not names:
-            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
-    sources = [parse_source(s) for s in names]
+    spec, names, sources = world_sources(args)
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(stops=args.stops, **gas)
     if spec is not None:
@@ -125,9 +117,6 @@ def _experiment(args) -> int:
         print()
     print(f"written to {args.out}: summary.json, metrics.csv, one folder per source and estimator, runs/")
     return 0
-
-
-_DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def _seeds_text(seeds: range) -> str:
@@ -235,11 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(func=_demo)
 
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
-    exp.add_argument("--world", default=None, help="world file: your own house (see docs/guide/own-house.md); "
-                     "default: the embedded house")
-    exp.add_argument("--sources", nargs="+", default=None,
-                     help="object class names, 'x,y' positions or the world file's source names (default: the "
-                     "world's sources; for the embedded house oven bed 5.0,6.0)")
+    add_world_arguments(exp)
     exp.add_argument("--seeds", type=seed_count, default=10,
                      help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
     exp.add_argument("--first-seed", default="0", metavar="N",
