@@ -14,11 +14,12 @@ Used by ``psgsl experiment`` and ``psgsl search``::
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import signal
 import sys
 
-__all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "add_world_arguments", "interrupted", "positive_float",
+__all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "add_workers_argument", "add_world_arguments", "interrupted", "positive_float",
            "positive_int", "seed_count", "seed_range", "worker_count", "world_sources"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
@@ -131,6 +132,13 @@ def world_sources(args):
 def worker_count(text):
     """argparse type of ``--workers``: 1 to :data:`MAX_WORKERS`."""
     return positive_int(text, MAX_WORKERS)
+
+
+def add_workers_argument(parser) -> None:
+    """Add ``--workers`` (:func:`worker_count`; default: two processes, or one on a one-core machine), shared by
+    every command that runs a grid."""
+    parser.add_argument("--workers", type=worker_count, default=min(2, os.cpu_count() or 1),
+                        help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
 
 
 def add_scheduler_argument(parser) -> None:

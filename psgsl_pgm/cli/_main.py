@@ -20,14 +20,13 @@ from pathlib import Path
 from . import _benchmark, _export, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
-    MAX_WORKERS,
     add_scheduler_argument,
+    add_workers_argument,
     add_world_arguments,
     interrupted,
     positive_int,
     seed_count,
     seed_range,
-    worker_count,
     world_sources,
 )
 from ._usage import UsageError as _UsageError
@@ -211,14 +210,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
                                      "Without a command: the demo.")
     sub = parser.add_subparsers(dest="command")
-    workers = min(2, os.cpu_count() or 1)
 
     demo = sub.add_parser("demo", help="the validation experiment in small, then a small closed-loop "
                           "comparison (27–32 s on 2 idle cores; the first run also compiles the kernels)")
     demo.add_argument("--out", default="psgsl-demo", help="output directory (default: %(default)s)")
     demo.add_argument("--seeds", type=seed_count, default=None, help=f"number of seeds, at most {MAX_SEEDS} (default: 4)")
-    demo.add_argument("--workers", type=worker_count, default=workers,
-                      help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(demo)
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
     demo.add_argument("--no-search", action="store_true", help="skip the closed-loop comparison")
     demo.set_defaults(func=_demo)
@@ -231,8 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
-    exp.add_argument("--workers", type=worker_count, default=workers,
-                     help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)
     exp.add_argument("--stops", type=positive_int, default=None,

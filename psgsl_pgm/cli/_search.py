@@ -8,16 +8,15 @@ from pathlib import Path
 
 from ._grid import (
     MAX_SEEDS,
-    MAX_WORKERS,
     add_found_arguments,
     add_scheduler_argument,
+    add_workers_argument,
     add_world_arguments,
     interrupted,
     positive_float,
     positive_int,
     seed_count,
     seed_range,
-    worker_count,
     world_sources,
 )
 
@@ -31,7 +30,6 @@ def add_parser(subparsers):
     from ..experiment import ESTIMATORS, VARIANTS
     from ..search import OPEN_SPACE_POLICIES, POLICIES, SCORES
 
-    workers = min(2, os.cpu_count() or 1)
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
     add_world_arguments(p)
@@ -51,8 +49,7 @@ def add_parser(subparsers):
                    help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
                    "(default: %(default)s)")
     add_found_arguments(p)
-    p.add_argument("--workers", type=worker_count, default=workers,
-                   help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

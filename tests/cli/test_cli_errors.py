@@ -227,6 +227,21 @@ def test_grid_sources_are_the_given_ones_else_the_embedded_houses():
                                                                                [parse_source("bed"), (1.0, 2.0)])
 
 
+@pytest.mark.parametrize("command", ["demo", "experiment", "search", "benchmark"])
+def test_every_grid_command_takes_the_same_workers_option(monkeypatch, capsys, command):
+    parser, default = cli.build_parser(), min(2, os.cpu_count() or 1)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    one_core = cli.build_parser()
+    assert parser.parse_args([command]).workers == default
+    assert one_core.parse_args([command]).workers == 1
+    assert parser.parse_args([command, "--workers", "1024"]).workers == 1024
+    for bad in ("0", "1025"):
+        with pytest.raises(SystemExit) as info:
+            parser.parse_args([command, "--workers", bad])
+        assert info.value.code == 2
+    assert "argument --workers: expected a positive integer of at most 1024, got '1025'" in capsys.readouterr().err
+
+
 def test_demo_refuses_a_device_as_out(capsys, no_runs):
     assert cli.main(["demo", "--out", "/dev/full", "--quiet"]) == 2
     assert "--out: '/dev/full' exists and is not a directory" in _error_line(capsys, "demo")
