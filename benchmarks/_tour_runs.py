@@ -33,7 +33,8 @@ def add_run_arguments(ap, *, first_seed: int, seeds: int):
 
 def start_tour_run(source, seed, estimator, config, *, variants=VARIANTS):
     """The checked config, world, exploration tour, :class:`VariantPosteriors` (of ``variants``) and true source
-    cell (row, col) of one fixed-tour run, as :func:`psgsl_pgm.experiment.run_search` starts one (without ``config.stops``)."""
+    cell (row, col) of one fixed-tour run, as :func:`psgsl_pgm.experiment.run_search` starts one (but the whole
+    tour, whatever ``config.stops``)."""
     config, spec, setting, world = start_run(source, seed, estimator, config)
     house = world.house
     tour = exploration_tour(house, start=setting.start_for(house))
