@@ -17,10 +17,9 @@ import time
 
 import numpy as np
 
-from psgsl_pgm.experiment import ExperimentConfig, VARIANTS, VariantPosteriors
+from _tour_runs import add_run_arguments, start_tour_run
+from psgsl_pgm.experiment import ExperimentConfig, VARIANTS
 from psgsl_pgm.experiment._run import walk
-from psgsl_pgm.experiment._step import start_run
-from psgsl_pgm.experiment._tour import exploration_tour
 from psgsl_pgm.search import credible_region
 
 
@@ -31,11 +30,8 @@ def hpd_level(post, cell):
 
 
 def one_run(source, seed, estimator, config):
-    config, spec, setting, world = start_run(source, seed, estimator, config)
+    config, world, tour, beliefs, cell = start_tour_run(source, seed, estimator, config)
     house = world.house
-    tour = exploration_tour(house, start=setting.start_for(house))
-    beliefs = VariantPosteriors(world, estimator, config, setting=setting)
-    cell = house.grid.cell_of(world.source)
     n = len(tour)
     checkpoints = {int(round(f * n)): name for f, name in ((0.25, "quarter"), (0.5, "half"), (0.75, "three_quarters"),
                                                          (1.0, "final"))}
@@ -63,19 +59,15 @@ def one_run(source, seed, estimator, config):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--first-seed", type=int, default=200)
-    ap.add_argument("--seeds", type=int, default=5)
-    ap.add_argument("--sources", default="oven;bed;5.0,6.0")
-    ap.add_argument("--estimators", default="infotaxis,pmfs")
+    add_run_arguments(ap, first_seed=200, seeds=5)
     ap.add_argument("--detector-model", default=None, help="estimated | simulator (new code only)")
-    ap.add_argument("--out", required=True)
     a = ap.parse_args()
     kw = {} if a.detector_model is None else {"detector_model": a.detector_model}
     config = ExperimentConfig(**kw)
     runs = []
     t0 = time.perf_counter()
-    for est in a.estimators.split(","):
-        for src in a.sources.split(";"):
+    for est in a.estimators:
+        for src in a.sources:
             for seed in range(a.first_seed, a.first_seed + a.seeds):
                 runs.append(one_run(src, seed, est, config))
                 print(f"{est} {src} {seed} {time.perf_counter() - t0:.0f} s", flush=True)

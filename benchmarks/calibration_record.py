@@ -26,23 +26,19 @@ import time
 
 import numpy as np
 
-from psgsl_pgm.experiment import GRID_CALIBRATION_RUNS, PARAMETER_GRID, ExperimentConfig, VARIANTS, VariantPosteriors
+from _tour_runs import add_run_arguments, start_tour_run
+from psgsl_pgm.experiment import GRID_CALIBRATION_RUNS, PARAMETER_GRID, ExperimentConfig, VARIANTS
 from psgsl_pgm.experiment._metrics import CALIBRATION_POINTS, at_fractions
 from psgsl_pgm.experiment._run import walk
-from psgsl_pgm.experiment._step import start_run
-from psgsl_pgm.experiment._tour import exploration_tour
 
 
 def one_run(source, seed, estimator, config, *, semantics: bool, grid: bool):
     grid_config = ExperimentConfig(**{**config.to_dict(), "parameter_grid": PARAMETER_GRID}) \
         if estimator == "infotaxis" and grid else config
-    grid_config, spec, setting, world = start_run(source, seed, estimator, grid_config)
-    house = world.house
-    tour = exploration_tour(house, start=setting.start_for(house))
     variants = VARIANTS if semantics else ("olfaction",)
-    beliefs = VariantPosteriors(world, estimator, grid_config, setting=setting, variants=variants)
+    grid_config, world, tour, beliefs, cell = start_tour_run(source, seed, estimator, grid_config, variants=variants)
+    house = world.house
     est = beliefs.estimator
-    cell = house.grid.cell_of(world.source)
     t0 = world.time
     times, states = [0.0], [None]
     for j, stop, reading, wind, frames in walk(world, tour, grid_config, camera=semantics and not beliefs.mapped):
@@ -74,23 +70,19 @@ def one_run(source, seed, estimator, config, *, semantics: bool, grid: bool):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--first-seed", type=int, default=300)
-    ap.add_argument("--seeds", type=int, default=20)
-    ap.add_argument("--sources", default="oven;bed;5.0,6.0")
-    ap.add_argument("--estimators", default="infotaxis,pmfs")
+    add_run_arguments(ap, first_seed=300, seeds=20)
     ap.add_argument("--calibration", action="store_true", help="the grid calibration runs, olfaction only")
     ap.add_argument("--olfaction-only", action="store_true", help="no camera, no semantic variants")
     ap.add_argument("--grid", action="store_true", help="Infotaxis with PARAMETER_GRID (about 3x the time)")
-    ap.add_argument("--out", required=True)
     a = ap.parse_args()
     config = ExperimentConfig()
     if a.calibration:
         jobs = [(src, seed) for seed, src in GRID_CALIBRATION_RUNS]
     else:
-        jobs = [(src, seed) for seed in range(a.first_seed, a.first_seed + a.seeds) for src in a.sources.split(";")]
+        jobs = [(src, seed) for seed in range(a.first_seed, a.first_seed + a.seeds) for src in a.sources]
     os.makedirs(a.out, exist_ok=True)
     t0 = time.perf_counter()
-    for est in a.estimators.split(","):
+    for est in a.estimators:
         for src, seed in jobs:
             path = os.path.join(a.out, f"{est}_{src}_{seed}.npz")
             if os.path.exists(path):

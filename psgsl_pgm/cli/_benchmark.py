@@ -3,19 +3,17 @@ occur, three ontology conditions; a resumable grid and a report (``report.md``, 
 
 from __future__ import annotations
 
-import os
 import shlex
 from pathlib import Path
 
 from ._grid import (
     MAX_SEEDS,
-    MAX_WORKERS,
     add_found_arguments,
     add_scheduler_argument,
+    add_workers_argument,
     interrupted,
     positive_float,
     seed_count,
-    worker_count,
 )
 
 __all__ = ["add_parser", "run"]
@@ -43,7 +41,6 @@ def add_parser(subparsers):
     from ..search._benchmark import BENCHMARK_POLICIES, BENCHMARK_VARIANTS
     from ..search._episodes import CONDITIONS
 
-    workers = min(2, os.cpu_count() or 1)
     p = subparsers.add_parser("benchmark", help="closed-loop search in many generated homes (or one world file): "
                               "sources drawn from the ontology, right/wrong/no-rooms ontology, a report")
     p.add_argument("--houses", type=_house_count, default=0,
@@ -72,8 +69,7 @@ def add_parser(subparsers):
                    help="room types of every generated home, one per room (Kitchen Bathroom Bedroom LivingRoom "
                    "Hallway)")
     add_found_arguments(p)
-    p.add_argument("--workers", type=worker_count, default=workers,
-                   help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-benchmark", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

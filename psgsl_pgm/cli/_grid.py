@@ -1,5 +1,6 @@
-"""Command-line side of the grid runner (:mod:`psgsl_pgm.runs._runner`): ``--scheduler``, the Ctrl-C line, and the
-argument types of counts and budgets (``--seeds``, ``--workers``, ... with their size guards).
+"""Command-line side of the grid runner (:mod:`psgsl_pgm.runs._runner`): ``--scheduler``, the Ctrl-C line, the
+argument types of counts and budgets (``--seeds``, ``--workers``, ... with their size guards), and the world and
+sources of a grid (``--world``, ``--sources``).
 
 Used by ``psgsl experiment`` and ``psgsl search``::
 
@@ -13,12 +14,14 @@ Used by ``psgsl experiment`` and ``psgsl search``::
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import signal
 import sys
 
-__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments", "add_scheduler_argument", "interrupted", "positive_float",
-           "positive_int", "seed_count", "seed_range", "worker_count"]
+__all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments",
+           "add_scheduler_argument", "add_workers_argument", "add_world_arguments", "interrupted", "positive_float",
+           "positive_int", "seed_count", "seed_range", "worker_count", "world_sources"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
@@ -29,6 +32,9 @@ EXIT_TERMINATED = 128 + signal.SIGTERM
 #: Size guards of the command line: more seeds than this is years of runs, more workers than this no machine has.
 MAX_SEEDS = 10_000
 MAX_WORKERS = 1024
+
+#: The sources of ``psgsl experiment`` and ``psgsl search`` in the embedded house when ``--sources`` is not given.
+DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def positive_int(text, maximum=None):
@@ -91,9 +97,49 @@ def add_found_arguments(parser) -> None:
                         "(default: the world file's 'clearance', else 0.25)")
 
 
+def add_world_arguments(parser) -> None:
+    """``--world`` and ``--sources``, shared by ``psgsl experiment`` and ``psgsl search`` (read by
+    :func:`world_sources`)."""
+    parser.add_argument("--world", default=None, help="world file: your own house (see docs/guide/own-house.md); "
+                        "default: the embedded house")
+    parser.add_argument("--sources", nargs="+", default=None,
+                        help="object class names, 'x,y' positions or the world file's source names (default: the "
+                        f"world's sources; for the embedded house {' '.join(DEFAULT_SOURCES)})")
+
+
+def world_sources(args):
+    """The world file, source names and sources of a grid command: ``(spec, names, sources)``.
+
+    ``spec`` is the :class:`psgsl_pgm.sim.WorldSpec` of ``args.world`` (None: the embedded house); ``names`` are
+    ``args.sources``, else the world file's sources, else :data:`DEFAULT_SOURCES`; ``sources`` are the names
+    parsed by :func:`psgsl_pgm.experiment.parse_source`. Raises ValueError for a bad world file, a world file
+    that names no sources (and no ``--sources``) or a bad source: one line, exit 2, nothing written.
+    """
+    from ..experiment import parse_source
+
+    spec = None
+    if args.world is not None:
+        from ..sim import load_world
+
+        spec = load_world(args.world)
+    names = args.sources
+    if names is None:
+        names = list(spec.sources) if spec is not None else list(DEFAULT_SOURCES)
+        if not names:
+            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+    return spec, names, [parse_source(s) for s in names]
+
+
 def worker_count(text):
     """argparse type of ``--workers``: 1 to :data:`MAX_WORKERS`."""
     return positive_int(text, MAX_WORKERS)
+
+
+def add_workers_argument(parser) -> None:
+    """Add ``--workers`` (:func:`worker_count`; default: two processes, or one on a one-core machine), shared by
+    every command that runs a grid."""
+    parser.add_argument("--workers", type=worker_count, default=min(2, os.cpu_count() or 1),
+                        help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
 
 
 def add_scheduler_argument(parser) -> None:

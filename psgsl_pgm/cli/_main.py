@@ -20,13 +20,14 @@ from pathlib import Path
 from . import _benchmark, _export, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
-    MAX_WORKERS,
     add_scheduler_argument,
+    add_workers_argument,
+    add_world_arguments,
     interrupted,
     positive_int,
     seed_count,
     seed_range,
-    worker_count,
+    world_sources,
 )
 from ._usage import UsageError as _UsageError
 
@@ -85,22 +86,12 @@ def _demo(args) -> int:
 
 
 def _experiment(args) -> int:
-    from ..experiment import ExperimentConfig, check_sources, format_table, parse_source, run_experiment
+    from ..experiment import ExperimentConfig, check_sources, format_table, run_experiment
     from ..io._output import check_output_dir
     from ..runs._runner import GridInterrupted
 
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
-    spec = None
-    if args.world is not None:
-        from ..sim import load_world
-
-        spec = load_world(args.world)
-    names = args.sources
-    if names is None:
-        names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
-        if not names:
-            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
-    sources = [parse_source(s) for s in names]
+    spec, names, sources = world_sources(args)
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(stops=args.stops, **gas)
     if spec is not None:
@@ -125,9 +116,6 @@ def _experiment(args) -> int:
         print()
     print(f"written to {args.out}: summary.json, metrics.csv, one folder per source and estimator, runs/")
     return 0
-
-
-_DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def _seeds_text(seeds: range) -> str:
@@ -222,32 +210,25 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
                                      "Without a command: the demo.")
     sub = parser.add_subparsers(dest="command")
-    workers = min(2, os.cpu_count() or 1)
 
     demo = sub.add_parser("demo", help="the validation experiment in small, then a small closed-loop "
                           "comparison (27–32 s on 2 idle cores; the first run also compiles the kernels)")
     demo.add_argument("--out", default="psgsl-demo", help="output directory (default: %(default)s)")
     demo.add_argument("--seeds", type=seed_count, default=None, help=f"number of seeds, at most {MAX_SEEDS} (default: 4)")
-    demo.add_argument("--workers", type=worker_count, default=workers,
-                      help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(demo)
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
     demo.add_argument("--no-search", action="store_true", help="skip the closed-loop comparison")
     demo.set_defaults(func=_demo)
 
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
-    exp.add_argument("--world", default=None, help="world file: your own house (see docs/guide/own-house.md); "
-                     "default: the embedded house")
-    exp.add_argument("--sources", nargs="+", default=None,
-                     help="object class names, 'x,y' positions or the world file's source names (default: the "
-                     "world's sources; for the embedded house oven bed 5.0,6.0)")
+    add_world_arguments(exp)
     exp.add_argument("--seeds", type=seed_count, default=10,
                      help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
     exp.add_argument("--first-seed", default="0", metavar="N",
                      help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
-    exp.add_argument("--workers", type=worker_count, default=workers,
-                     help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)
     exp.add_argument("--stops", type=positive_int, default=None,

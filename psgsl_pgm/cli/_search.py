@@ -8,21 +8,21 @@ from pathlib import Path
 
 from ._grid import (
     MAX_SEEDS,
-    MAX_WORKERS,
     add_found_arguments,
     add_scheduler_argument,
+    add_workers_argument,
+    add_world_arguments,
     interrupted,
     positive_float,
     positive_int,
     seed_count,
     seed_range,
-    worker_count,
+    world_sources,
 )
 
 __all__ = ["add_parser", "run"]
 
 _SETTINGS = ((1.0, 1.0), (2.0, 2.0), (3.0, 1.0))
-_DEFAULT_SOURCES = ("oven", "bed", "5.0,6.0")
 
 
 def add_parser(subparsers):
@@ -30,14 +30,9 @@ def add_parser(subparsers):
     from ..experiment import ESTIMATORS, VARIANTS
     from ..search import OPEN_SPACE_POLICIES, POLICIES, SCORES
 
-    workers = min(2, os.cpu_count() or 1)
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
-    p.add_argument("--world", default=None, help="world file: your own house (see docs/guide/own-house.md); "
-                   "default: the embedded house")
-    p.add_argument("--sources", nargs="+", default=None,
-                   help="object class names, 'x,y' positions or the world file's source names (default: the "
-                   "world's sources; for the embedded house oven bed 5.0,6.0)")
+    add_world_arguments(p)
     p.add_argument("--policies", nargs="+", choices=POLICIES, default=["tour", "infotaxis", "space-aware-infotaxis"],
                    help="policies (default: %(default)s)")
     p.add_argument("--variants", nargs="+", choices=VARIANTS, default=["olfaction", "semantics+rooms"],
@@ -54,8 +49,7 @@ def add_parser(subparsers):
                    help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
                    "(default: %(default)s)")
     add_found_arguments(p)
-    p.add_argument("--workers", type=worker_count, default=workers,
-                   help=f"worker processes, at most {MAX_WORKERS} (default: %(default)s)")
+    add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -128,23 +122,13 @@ def run(args) -> int:
 def _run(args) -> int:
     if args.open_space:
         return _open_space(args)
-    from ..experiment import ExperimentConfig, parse_source
+    from ..experiment import ExperimentConfig
     from ..runs._runner import GridInterrupted
     from ..search import SearchConfig
     from ..search._grid import run_search_grid
 
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
-    spec = None
-    if args.world is not None:
-        from ..sim import load_world
-
-        spec = load_world(args.world)  # a bad world file: ValueError -> one line, exit 2, nothing written
-    names = args.sources
-    if names is None:
-        names = list(spec.sources) if spec is not None else list(_DEFAULT_SOURCES)
-        if not names:
-            raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
-    sources = [parse_source(s) for s in names]  # ValueError -> one line, exit 2
+    spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
     config = ExperimentConfig(gas=spec.gas) if spec is not None and spec.gas else ExperimentConfig()
     clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}

@@ -46,7 +46,9 @@ moves (:meth:`FreeSpace.candidates`).
   φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
   Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
   With the PMFS estimator, whose posterior is recomputed from a hit map rather than updated by Bayes' rule, φ_G
-  is the expected entropy drop under that estimator's own update (:func:`olfactory_gain`).
+  is the expected entropy drop under that estimator's own update (:func:`olfactory_gain`). Decided by exact
+  branch and bound (:func:`_choose_infotaxis`, :func:`_branch_and_bound`): upper bounds of φ_G and φ_O, then the
+  exact score of the poses whose bound reaches the best one (every pose under PMFS's own update).
 * ``space-aware-infotaxis`` — Loisy & Eloy (2022): the value V = log₂(D + 2^{H−1} − ½), with D the expected
   distance to the source and H the entropy in bits, estimates log₂ of the remaining search; in the house D is
   the expected geodesic distance in units of the found diameter ℓ = 2 ``found_radius`` and H is counted over
@@ -54,10 +56,10 @@ moves (:meth:`FreeSpace.candidates`).
   out. G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
   those of p(s | h, F̄) ∝ p(s) w_p(s) P(h | s) (:func:`space_aware_gain` computes them from cached rows without
   forming that belief); the semantic extension subtracts the view's expected information φ_O(p)/ln 2 bits from
-  H_h. Decided by exact branch and bound (:func:`_choose_space_aware`): a rigorous per-tile upper bound of every
-  pose's score, then the exact score of the few poses whose bound reaches the best one, the same arg max as
-  scoring every pose; the bound needs no geodesic distances from the pose (a Dijkstra each), which dominated the
-  decisions in large homes.
+  H_h. Decided by exact branch and bound (:func:`_choose_space_aware`, :func:`_branch_and_bound`): a rigorous
+  per-tile upper bound of every pose's score, then the exact score of the few poses whose bound reaches the best
+  one, the same arg max as scoring every pose; the bound needs no geodesic distances from the pose (a Dijkstra
+  each), which dominated the decisions in large homes.
 * ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
   the MAP cell, with the camera towards it.
 * ``semantic-modes`` — semantics alone, no gas: drive towards the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s),
@@ -360,8 +362,15 @@ def _view_information(sit: Situation, cells, gain=None) -> np.ndarray:
     return sit.space.view_gain(_semantic_gain(sit) if gain is None else gain, cells)
 
 
-def _best(score, cells, pred, drive, sit, *, headings=None):
-    flat = int(np.argmax(score))  # first maximum: lattice order, first heading
+def _first_max(score) -> int:
+    """The flat index of the winner of a (K, n_headings) ``score``: its first maximum, in lattice order and then
+    heading order (``np.argmax``)."""
+    return int(np.argmax(score))
+
+
+def _best(score, cells, pred, drive, sit, *, headings=None, flat=None):
+    """The :class:`Decision` of the winning pose of ``score`` (``flat``: its flat index, if known)."""
+    flat = _first_max(score) if flat is None else flat
     k, h = divmod(flat, score.shape[1])
     cell = int(cells[k])
     heading = float(sit.space.headings[h]) if headings is None else float(headings[k])
@@ -382,18 +391,64 @@ def _infotaxis_formula(p_f, h, phi_g, phi_o):
     return p_f[:, None] * h + (1.0 - p_f[:, None]) * (phi_g[:, None] + phi_o)
 
 
-_CHUNK = 8  # candidates evaluated together by _choose_infotaxis
+_CHUNK = 8  # candidates evaluated together by _branch_and_bound
+
+
+def _branch_and_bound(bound, evaluate, n_headings: int, *, chunk: int = _CHUNK):
+    """The first maximum of every candidate pose's score, evaluating only the candidates whose bound can win.
+
+    The candidates are evaluated in chunks of ``chunk``, from the highest bound down (equal bounds in candidate
+    order); within a chunk, those whose bound is below the best score found so far are skipped, and the search
+    stops at the first chunk in which every bound is (the later bounds are lower still). With valid bounds a
+    skipped candidate scores below one already found, so the winner is the one :func:`_first_max` picks from
+    every candidate's score: the first maximum in candidate (lattice) order, then heading order — a candidate
+    whose bound equals the best score is evaluated, so a tie with it goes to the earlier candidate, as when
+    every candidate is scored.
+
+    Parameters
+    ----------
+    bound : (K,) ndarray
+        An upper bound of each candidate's largest score over its headings (+inf: always evaluated; a NaN
+        bound is never evaluated).
+    evaluate : callable
+        ``evaluate(k)`` → (len(k), n_headings) the exact scores of the candidates ``k`` ((m,) int array, in
+        the order of evaluation); each row must depend on its own candidate only.
+    n_headings : int
+        The number of headings (columns of the score).
+    chunk : int
+        Candidates evaluated together.
+
+    Returns
+    -------
+    flat : int
+        The winner's flat index into ``score`` (candidate, heading = divmod(flat, n_headings)).
+    score : (K, n_headings) ndarray
+        The exact score of every evaluated candidate, −inf for those skipped.
+    """
+    order = np.argsort(-bound, kind="stable")
+    score = np.full((len(bound), n_headings), -np.inf)
+    best = -np.inf
+    for start in range(0, len(order), chunk):
+        k = order[start : start + chunk]
+        k = k[bound[k] >= best]
+        if k.size == 0:
+            break
+        score[k] = evaluate(k)
+        best = max(best, float(score[k].max()))
+    return _first_max(score), score
 
 
 def _choose_infotaxis(sit: Situation) -> Decision:
     """The infotaxis decision, the best-scoring pose of :func:`infotaxis_gain`, by branch and bound.
 
     Every candidate's score has an upper bound: G ≤ P_f H + (1 − P_f)(B_G + B_O), with B_G ≥ φ_G
-    (:func:`_olfactory_bound`) and B_O ≥ φ_O at every heading (:meth:`FreeSpace.view_bound`), through the same monotone floating-point operations and the same
-    scoring rule as the score itself (so it bounds the *computed* score). The candidates are evaluated exactly
-    — φ_G and φ_O, each candidate's own products, the very numbers of :func:`infotaxis_gain` — from the highest
-    bound down, until the next bound is below the best score found; the others cannot win. The winner is the
-    first maximum in lattice order among the evaluated ones, the candidate :func:`infotaxis_gain` would pick.
+    (:func:`_olfactory_bound`) and B_O ≥ φ_O at every heading (:meth:`FreeSpace.view_bound`), through the same
+    monotone floating-point operations and the same scoring rule as the score itself (so it bounds the *computed*
+    score); when a bound is not finite or some P_f > 1 (so 1 − P_f < 0), every candidate is evaluated. The
+    candidates are evaluated exactly — φ_G and φ_O, each candidate's own products, the very numbers of
+    :func:`infotaxis_gain` — from the highest bound down, until the next bound is below the best score found
+    (:func:`_branch_and_bound`); the others cannot win. The winner is the first maximum in lattice order, the
+    candidate :func:`infotaxis_gain` would pick.
     """
     cells, drive, pred, tau = _candidates(sit)
     if getattr(sit.beliefs.estimator, "reading_log_ratio", None) is not None:  # φ_G under its own update: no bound
@@ -403,21 +458,15 @@ def _choose_infotaxis(sit: Situation) -> Decision:
     gain = _semantic_gain(sit)
     b_o = np.zeros(len(cells)) if gain is None else sit.space.view_bound(gain, cells)
     bound = _score(sit, _infotaxis_formula(p_f, h, _olfactory_bound(sit, cells), b_o[:, None]), tau).max(axis=1)
-    score = np.full(tau.shape, -np.inf)
-    if np.isfinite(bound).all() and (p_f <= 1.0).all():  # else (1 − P_f) < 0 or no bound: evaluate every candidate
-        order = np.argsort(-bound, kind="stable")
-    else:
-        order, bound = np.arange(len(cells)), np.full(len(cells), np.inf)
-    best = -np.inf
-    for start in range(0, len(order), _CHUNK):
-        k = order[start : start + _CHUNK]
-        k = k[bound[k] >= best]
-        if k.size == 0:
-            break
+    if not (np.isfinite(bound).all() and (p_f <= 1.0).all()):  # (1 − P_f) < 0 or no bound: evaluate every one
+        bound = np.full(len(cells), np.inf)
+
+    def evaluate(k):
         phi_o = _view_information(sit, cells[k], gain)
-        score[k] = _score(sit, _infotaxis_formula(p_f[k], h, olfactory_gain(sit, cells[k]), phi_o), tau[k])
-        best = max(best, float(score[k].max()))
-    return _best(score, cells, pred, drive, sit)
+        return _score(sit, _infotaxis_formula(p_f[k], h, olfactory_gain(sit, cells[k]), phi_o), tau[k])
+
+    flat, score = _branch_and_bound(bound, evaluate, tau.shape[1])
+    return _best(score, cells, pred, drive, sit, flat=flat)
 
 
 def space_aware_gain(sit: Situation, cells):
@@ -668,12 +717,12 @@ def _choose_space_aware(sit: Situation) -> Decision:
     """The space-aware infotaxis decision, the best-scoring pose of :func:`space_aware_gain`, by branch and bound.
 
     Every candidate pose's score has an upper bound: the scoring rule (monotone in G) of the bound of
-    :func:`_space_aware_bound` on its computed G; a candidate's bound is the largest over its headings. The candidates are evaluated exactly —
-    :func:`_space_aware_values`, each candidate's own products, the very numbers of :func:`space_aware_gain` —
-    from the highest bound down, until the next bound is below the best score found; the others cannot win (the
-    bound costs one product of its row and O(tiles) per candidate: no Dijkstra from it, no entr of its rows). The
-    winner is
-    the first maximum in lattice order among the evaluated ones, the candidate :func:`space_aware_gain` would pick.
+    :func:`_space_aware_bound` on its computed G; a candidate's bound is the largest over its headings. The
+    candidates are evaluated exactly — :func:`_space_aware_values`, each candidate's own products, the very
+    numbers of :func:`space_aware_gain` — from the highest bound down, until the next bound is below the best score
+    found (:func:`_branch_and_bound`); the others cannot win (the bound costs one product of its row and O(tiles)
+    per candidate: no Dijkstra from it, no entr of its rows). The winner is the first maximum in lattice order,
+    the candidate :func:`space_aware_gain` would pick.
     """
     cells, drive, pred, tau = _candidates(sit)
     if getattr(sit.beliefs.estimator, "reading_log_ratio", None) is not None:  # its own update: no bound
@@ -682,18 +731,13 @@ def _choose_space_aware(sit: Situation) -> Decision:
     p_f, rows = _found_mass(sit, cells)
     phi = _view_bits(sit, sa, cells)  # exact (the views are cached per position), used by both
     bound = _score(sit, _space_aware_bound(sit, sa, cells, p_f, rows, drive, phi), tau).max(axis=1)
-    order = np.argsort(-bound, kind="stable")
-    score = np.full(tau.shape, -np.inf)
-    best = -np.inf
-    for start in range(0, len(order), _CHUNK):
-        k = order[start : start + _CHUNK]
-        k = k[bound[k] >= best]
-        if k.size == 0:
-            break
-        gain = _space_aware_values(sit, sa, cells[k], p_f[k], [rows[i] for i in k.tolist()], phi[k])
-        score[k] = _score(sit, gain, tau[k])
-        best = max(best, float(score[k].max()))
-    return _best(score, cells, pred, drive, sit)
+
+    def evaluate(k):
+        return _score(sit, _space_aware_values(sit, sa, cells[k], p_f[k], [rows[i] for i in k.tolist()], phi[k]),
+                      tau[k])
+
+    flat, score = _branch_and_bound(bound, evaluate, tau.shape[1])
+    return _best(score, cells, pred, drive, sit, flat=flat)
 
 
 def _reachable_nearest(sit: Situation, target: int) -> int:

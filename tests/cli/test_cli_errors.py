@@ -200,6 +200,48 @@ def test_experiment_bad_source_or_out_is_one_line_before_any_run(tmp_path, capsy
     assert re.search(message, _error_line(capsys, "experiment"))
 
 
+@pytest.mark.parametrize("command", ["experiment", "search"])
+def test_a_world_file_naming_no_sources_wants_sources(tmp_path, capsys, monkeypatch, no_runs, command):
+    from types import SimpleNamespace
+
+    import psgsl_pgm.sim as sim
+
+    monkeypatch.setattr(sim, "load_world", lambda path: SimpleNamespace(sources={}, gas=None))
+    args = [command, "--world", str(tmp_path / "w.yaml"), "--seeds", "1", "--workers", "1", "--quiet", "--out",
+            str(tmp_path / "o")]
+    assert cli.main(args) == 2
+    assert _error_line(capsys, command).endswith("w.yaml: the world file names no 'sources'; give --sources")
+    assert not (tmp_path / "o").exists()
+
+
+def test_grid_sources_are_the_given_ones_else_the_embedded_houses():
+    from argparse import Namespace
+
+    from psgsl_pgm.cli._grid import world_sources
+    from psgsl_pgm.experiment import parse_source
+
+    spec, names, sources = world_sources(Namespace(world=None, sources=None))
+    assert spec is None and names == ["oven", "bed", "5.0,6.0"]
+    assert sources == [parse_source("oven"), parse_source("bed"), parse_source("5.0,6.0")]
+    assert world_sources(Namespace(world=None, sources=["bed", "1,2"]))[1:] == (["bed", "1,2"],
+                                                                               [parse_source("bed"), (1.0, 2.0)])
+
+
+@pytest.mark.parametrize("command", ["demo", "experiment", "search", "benchmark"])
+def test_every_grid_command_takes_the_same_workers_option(monkeypatch, capsys, command):
+    parser, default = cli.build_parser(), min(2, os.cpu_count() or 1)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    one_core = cli.build_parser()
+    assert parser.parse_args([command]).workers == default
+    assert one_core.parse_args([command]).workers == 1
+    assert parser.parse_args([command, "--workers", "1024"]).workers == 1024
+    for bad in ("0", "1025"):
+        with pytest.raises(SystemExit) as info:
+            parser.parse_args([command, "--workers", bad])
+        assert info.value.code == 2
+    assert "argument --workers: expected a positive integer of at most 1024, got '1025'" in capsys.readouterr().err
+
+
 def test_demo_refuses_a_device_as_out(capsys, no_runs):
     assert cli.main(["demo", "--out", "/dev/full", "--quiet"]) == 2
     assert "--out: '/dev/full' exists and is not a directory" in _error_line(capsys, "demo")

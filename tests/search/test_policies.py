@@ -298,3 +298,57 @@ def test_gains_use_the_detection_model_footprints_and_misses(situation, miss):
     np.testing.assert_allclose(info, p_f[:, None] * h_s + (1 - p_f[:, None]) * (
         olfactory_gain(sit, cells)[:, None] + _view_information(sit, cells)), rtol=1e-10)
     assert p_f[:3].max() > 0  # the oven's footprint is within reach of the cells beside it
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 8])
+def test_branch_and_bound_returns_the_first_maximum_of_every_score(chunk):
+    """Against the brute-force first arg max over random scores with many ties (small integers, some −inf rows)
+    and valid upper bounds, many of them tight (a bound equal to the best score: the tie must still go to the
+    earlier candidate), some +inf; each candidate is evaluated at most once, in chunks, from the highest bound
+    down, and every candidate whose bound reaches the winning score is evaluated."""
+    from psgsl_pgm.search._policies import _branch_and_bound
+
+    rng = np.random.default_rng(11)
+    pruned = 0
+    for _ in range(400):
+        n, n_h = int(rng.integers(1, 30)), int(rng.integers(1, 4))
+        score = rng.integers(0, 4, (n, n_h)).astype(np.float64)
+        score[rng.random(n) < 0.1] = -np.inf
+        slack = np.where(rng.random(n) < 0.5, 0.0, rng.integers(0, 3, n).astype(np.float64))
+        bound = score.max(axis=1) + slack
+        bound[rng.random(n) < 0.05] = np.inf
+        calls = []
+
+        def evaluate(k):
+            calls.append(k.copy())
+            return score[k]
+
+        flat, got = _branch_and_bound(bound, evaluate, n_h, chunk=chunk)
+        assert flat == int(np.argmax(score))  # brute force: the first maximum, candidate order then heading
+        seen = np.concatenate(calls)
+        assert len(np.unique(seen)) == len(seen) and all(1 <= len(k) <= chunk for k in calls)
+        assert (bound[seen][1:] <= bound[seen][:-1]).all()  # from the highest bound down
+        assert set(np.flatnonzero(bound >= score.ravel()[flat])) <= set(seen.tolist())
+        np.testing.assert_array_equal(got[seen], score[seen])
+        assert (got[np.setdiff1d(np.arange(n), seen)] == -np.inf).all()
+        pruned += len(seen) < n
+    assert pruned > 100  # the bounds do prune
+
+
+def test_branch_and_bound_stops_when_the_bounds_fall_below_the_best_score():
+    from psgsl_pgm.search._policies import _branch_and_bound
+
+    bound = np.array([1.0, 5.0, 4.0, 3.0, 2.0, 0.5])
+    score = np.array([[1.0], [4.0], [4.0], [3.0], [2.0], [0.5]])
+    calls = []
+
+    def evaluate(k):
+        calls.append(k.tolist())
+        return score[k]
+
+    flat, got = _branch_and_bound(bound, evaluate, 1, chunk=2)
+    # chunk [1, 2] (best 4), then [3, 4] both below 4: stop; the tie 4 = 4 goes to candidate 1
+    assert calls == [[1, 2]] and flat == 1
+    np.testing.assert_array_equal(got.ravel(), [-np.inf, 4.0, 4.0, -np.inf, -np.inf, -np.inf])
+    flat, _ = _branch_and_bound(np.array([4.0, 5.0, 9.0]), lambda k: np.array([[4.0], [4.0], [2.0]])[k], 1, chunk=1)
+    assert flat == 0  # bound 4 equals the best score 4 of candidate 1 (evaluated first): still evaluated, and wins
