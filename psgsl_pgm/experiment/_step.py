@@ -238,7 +238,7 @@ class VariantPosteriors:
         """Condition p(s | g) on an observation of s other than a gas reading (the closed loop's "not found
         here", :class:`psgsl_pgm.search.DetectionModel`): every variant's p(s | g, z) ∝ p(s | g) p(s | z) then
         holds its factor exactly once (the fixed tour of the validation experiment never calls this)."""
-        self.estimator.condition(log_likelihood)
+        self.estimator._condition(log_likelihood)  # the posterior is read at the next record, after the reading
 
     def semantic(self, variant: str) -> np.ndarray:
         """p(s | z) of a semantic variant, (H, W)."""

@@ -223,6 +223,13 @@ class OlfactoryEstimator(abc.ABC):
         posterior : (H, W) ndarray of float64
             The conditioned posterior (read-only view).
         """
+        self._condition(log_likelihood)
+        return self.posterior
+
+    def _condition(self, log_likelihood) -> None:
+        """:meth:`condition` without reading the conditioned posterior back: it is normalised when first read,
+        and the closed loop's next reading replaces it unread (one log-sum-exp and one exp of the map saved per
+        stop; the same numbers whenever it is read)."""
         ll = as_float_array(log_likelihood, "log_likelihood", dtype=np.float64)
         n = self.geometry.shape[0] * self.geometry.shape[1]
         if ll.size != n or ll.shape not in (self.geometry.shape, (n,)):
@@ -237,7 +244,6 @@ class OlfactoryEstimator(abc.ABC):
                              "it was not applied")
         self._log_other = ll.copy() if self._log_other is None else self._log_other + ll
         self._set_log_posterior(log_target)
-        return self.posterior
 
     # --- read-out -------------------------------------------------------------------------------------------
     @property

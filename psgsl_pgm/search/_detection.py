@@ -43,12 +43,16 @@ R(c)} p(c).
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 import scipy.sparse as sp
 
 from .._shared._validate import bool_mask, positive, unit_interval
 
 __all__ = ["DetectionModel"]
+
+_PATHS_MAX = 1024  # paths whose found hypotheses are kept (the drives between a run's stops: tens to hundreds)
 
 
 def _d2(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
@@ -106,6 +110,7 @@ class DetectionModel:
         dr, dc = np.mgrid[-reach : reach + 1, -reach : reach + 1]
         self._offsets = np.stack([dr.ravel(), dc.ravel()], axis=1)
         self._rows_cache: dict = {}
+        self._paths: OrderedDict = OrderedDict()  # path points -> the hypotheses found along it (_found_along)
 
     @classmethod
     def from_house(cls, house, found_radius: float, *, miss_probability: float = 0.0) -> "DetectionModel":
@@ -228,8 +233,23 @@ class DetectionModel:
         """(H·W,) P(not found along ``points`` | s = c): m on every hypothesis found from some point, 1 elsewhere
         (one detection trial for the whole path)."""
         out = np.ones(self.centres.shape[0])
-        out[self._pairs(points)[1]] = self.miss_probability
+        out[self._found_along(points)] = self.miss_probability
         return out
+
+    def _found_along(self, points) -> np.ndarray:
+        """The hypotheses found from some point of ``points`` (:meth:`_pairs`), cached per path: the robot
+        drives the same few paths between its stops again and again."""
+        p = np.ascontiguousarray(self._points(points))
+        key = (p.shape, p.tobytes())
+        hit = self._paths.get(key)
+        if hit is not None:
+            self._paths.move_to_end(key)
+            return hit
+        hit = self._paths[key] = self._pairs(p)[1]
+        hit.flags.writeable = False
+        if len(self._paths) > _PATHS_MAX:
+            self._paths.popitem(last=False)
+        return hit
 
     def not_found_log_likelihood(self, points) -> np.ndarray:
         """(H·W,) log of :meth:`not_found_likelihood` (−inf where a detector that never misses rules c out)."""

@@ -105,6 +105,7 @@ class FreeSpace:
         self._reach_cache: OrderedDict = OrderedDict()
         self._candidate_keys: deque = deque()  # the cached candidate sets, oldest first
         self._discs: dict = {}
+        self._gathers: OrderedDict = OrderedDict()  # candidate set -> the tiles of its views (view_bound)
         self._dist_cache_max = int(distance_cache)
         # tiles: the free cells of each block of _TILE × _TILE cells (numbered 0 … T − 1, every one non-empty), and
         # tile T holding every other cell; the cells sorted by tile, for per-tile reductions
@@ -431,14 +432,34 @@ class FreeSpace:
         rounding of either sum, ≤ 1e-12 for views of fewer than a million cells). Not finite when the gains are
         not."""
         sums = self.tile_sums(np.abs(gain_flat))
-        tiles = [self._view_tiles(c) for c in np.asarray(cells).tolist()]
-        sizes = np.array([t.size for t in tiles], dtype=np.int64)
-        out = np.zeros(len(tiles))
-        if sizes.sum():
-            starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-            nz = sizes > 0
-            out[nz] = np.add.reduceat(sums[np.concatenate(tiles)], starts[nz])
+        index, starts, nz = self._view_gather(cells)
+        out = np.zeros(nz.size)
+        if index.size:
+            out[nz] = np.add.reduceat(sums[index], starts)
         return out * (1.0 + 1e-9)
+
+    def _view_gather(self, cells):
+        """The tiles of the views of ``cells`` for :meth:`view_bound`, one gather: (their concatenation, the start
+        of each non-empty view in it, which views are non-empty), cached per candidate set (the robot comes back
+        to its stops, and a cell's candidates are the same every time)."""
+        cells = np.asarray(cells)
+        key = (cells.dtype.str, cells.tobytes())
+        hit = self._gathers.get(key)
+        if hit is not None:
+            self._gathers.move_to_end(key)
+            return hit
+        tiles = [self._view_tiles(c) for c in cells.tolist()]
+        sizes = np.array([t.size for t in tiles], dtype=np.int64)
+        nz = sizes > 0
+        index = np.concatenate(tiles) if sizes.sum() else np.empty(0, np.int64)
+        starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])[nz]
+        hit = (index, starts, nz)
+        for a in hit:
+            a.flags.writeable = False
+        self._gathers[key] = hit
+        if len(self._gathers) > self._dist_cache_max:
+            self._gathers.popitem(last=False)
+        return hit
 
     def tile_sums(self, values) -> np.ndarray:
         """(T + 1,) the sum of (H·W,) ``values`` over each tile (the last: every cell that is not free)."""

@@ -400,3 +400,36 @@ def test_bad_inputs_raise_with_clear_messages():
         hm.observe((0, 0), 1.0)
     with pytest.raises(ValueError, match="prior_hit must lie in"):
         HitProbabilityMap(GridMap(occ, 0.1), prior_hit=1.0)
+
+
+@pytest.mark.parametrize("kind", ["infotaxis", "pmfs"])
+def test_condition_unread_then_a_reading_is_the_same_posterior_bit_for_bit(kind):
+    """The closed loop's "not found" factor without reading the conditioned posterior back (``_condition``), then
+    the next reading: the same posterior and log posterior, bit for bit, as :meth:`condition` (which normalises
+    it at once); read right after ``_condition`` it is the one ``condition`` returns; a factor that rules out
+    every cell is refused by both and changes nothing."""
+    occ, wind, outlets = _map(15)
+    model = PlumeModel(occ, resolution=H, wind=wind, outlets=outlets, diffusivity=0.03, lifetime=8.0)
+    pos, _, hits, winds = _readings(occ, 6, 23)
+    rng = np.random.default_rng(29)
+    conds = [np.where(rng.random(occ.shape) < 0.2, np.log(0.3), 0.0) for _ in pos]
+
+    def make():
+        return (GridInfotaxis.from_model(model, false_hit_rate=0.05) if kind == "infotaxis"
+                else PMFSEstimator.from_model(model, tempering=0.4))
+
+    eager, lazy = make(), make()
+    for p, h, w, c in zip(pos, hits, winds, conds):
+        eager.condition(c)
+        lazy._condition(c)
+        eager.update(p, h, w)
+        lazy.update(p, h, w)
+        np.testing.assert_array_equal(lazy.posterior, eager.posterior)
+        np.testing.assert_array_equal(lazy.log_posterior, eager.log_posterior)
+    returned = eager.condition(conds[0])
+    lazy._condition(conds[0])
+    np.testing.assert_array_equal(lazy.posterior, returned)
+    before = lazy.posterior.copy()
+    with pytest.raises(ValueError, match="zero likelihood"):
+        lazy._condition(np.full(occ.shape, -np.inf))
+    np.testing.assert_array_equal(lazy.posterior, before)

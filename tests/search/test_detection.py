@@ -89,6 +89,11 @@ def test_not_found_likelihood_and_p_f(probe, miss):
     w = model.not_found_likelihood(pts[:5])
     np.testing.assert_array_equal(w, np.where(union, miss, 1.0))
     np.testing.assert_array_equal(np.isneginf(model.not_found_log_likelihood(pts[:5])), union & (miss == 0))
+    # the hypotheses found along a path are kept per path: the same path again, then others
+    np.testing.assert_array_equal(model.not_found_likelihood(pts[:5].copy()), w)
+    for path in (pts[1:6], pts[:4], pts[:5][::-1]):
+        along = model.rows(path).toarray().any(axis=0)
+        np.testing.assert_array_equal(model.not_found_likelihood(path), np.where(along, miss, 1.0))
     post = np.random.default_rng(1).random(union.size)
     post /= post.sum()
     cells = [model.source_cell(p) for p in pts[:8]]
