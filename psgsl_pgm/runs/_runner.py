@@ -545,16 +545,15 @@ class _Dask:
             self.event.set()
         except Exception:  # noqa: BLE001 - best effort on the way out
             pass
-        if self.cluster is not None:  # our own workers: kill them now (their nannies are closed right after)
-            for nanny in list(self.cluster.workers.values()):
-                proc = getattr(getattr(nanny, "process", None), "process", None)
-                pid = getattr(proc, "pid", None)
-                if pid:
-                    try:
-                        os.kill(pid, signal.SIGKILL)
-                    except OSError:
-                        pass
-        self.close(timeout=2)
+        with _quiet_distributed():  # the nannies report the killed workers (and restart them) before the close
+            if self.cluster is not None:  # our own workers: kill them now (their nannies are closed right after)
+                for proc in _worker_processes(self.cluster):
+                    if proc.pid:
+                        try:
+                            os.kill(proc.pid, signal.SIGKILL)
+                        except OSError:
+                            pass
+            self.close(timeout=2)
 
     def close(self, timeout=10):
         """Close the client and our own cluster, quietly and within about ``timeout`` seconds each.
