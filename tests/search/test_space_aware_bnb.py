@@ -49,7 +49,7 @@ def test_branch_and_bound_is_the_exhaustive_arg_max_in_short_episodes_of_each_be
              {"search": SearchConfig(found_radius=1e-3, time_budget=12.0)}),
             (("bed", 5, "space-aware-infotaxis", "semantics", "pmfs"),
              {"search": SearchConfig(time_budget=12.0, miss_probability=0.3)})]
-    shares, sits = _along(monkeypatch, runs)
+    _, sits = _along(monkeypatch, runs)
     assert {s.variant for s in sits} == {"olfaction", "semantics"}
     assert all(s.detection is not None for s in sits if s.variant == "semantics")  # the detector that misses
 
