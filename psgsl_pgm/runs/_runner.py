@@ -48,6 +48,7 @@ Minimal use::
 from __future__ import annotations
 
 import contextvars
+import logging
 import os
 import signal
 import threading
@@ -501,8 +502,11 @@ class _Dask:
         self.cluster = None
         if scheduler == "local":
             with _sigint_ignored():
+                # no dashboard; the scheduler's HTTP server (health checks) on a free port of this host: its
+                # default, 8787, may be taken (another cluster), which distributed reports on stderr
                 self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                            dashboard_address=None, preload=[__name__])
+                                            dashboard_address=None, preload=[__name__],
+                                            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
             self.client = Client(self.cluster)
         else:
             try:
@@ -541,26 +545,79 @@ class _Dask:
             self.event.set()
         except Exception:  # noqa: BLE001 - best effort on the way out
             pass
-        if self.cluster is not None:  # our own workers: kill them now (their nannies are closed right after)
-            for nanny in list(self.cluster.workers.values()):
-                proc = getattr(getattr(nanny, "process", None), "process", None)
-                pid = getattr(proc, "pid", None)
-                if pid:
-                    try:
-                        os.kill(pid, signal.SIGKILL)
-                    except OSError:
-                        pass
-        self.close(timeout=2)
+        with _quiet_distributed():  # the nannies report the killed workers (and restart them) before the close
+            if self.cluster is not None:  # our own workers: kill them now (their nannies are closed right after)
+                for proc in _worker_processes(self.cluster):
+                    if proc.pid:
+                        try:
+                            os.kill(proc.pid, signal.SIGKILL)
+                        except OSError:
+                            pass
+            self.close(timeout=2)
 
     def close(self, timeout=10):
+        """Close the client and our own cluster, quietly and within about ``timeout`` seconds each.
+
+        distributed's shutdown chatter (a nanny's "Worker process still alive after 4.0 seconds, killing" on a
+        loaded machine, "Event loop was unresponsive", a killed worker's restart notice) is held back: the CLI
+        promises one line after Ctrl-C or SIGTERM (:func:`_quiet_distributed`). Worker processes of our
+        cluster still alive after the close (it timed out) are killed: nothing of theirs is needed any more.
+        """
         client, self.client = getattr(self, "client", None), None
         cluster, self.cluster = self.cluster, None
-        for obj in (client, cluster):
-            if obj is not None:
-                try:
-                    obj.close(timeout=timeout)
-                except Exception:  # noqa: BLE001 - closing a cluster whose workers were killed may complain
-                    pass
+        procs = _worker_processes(cluster) if cluster is not None else []
+        with _quiet_distributed():
+            for obj in (client, cluster):
+                if obj is not None:
+                    try:
+                        obj.close(timeout=timeout)
+                    except Exception:  # noqa: BLE001 - closing a cluster whose workers were killed may complain
+                        pass
+            for proc in procs:
+                if proc.exitcode is None and proc.pid:
+                    try:
+                        os.kill(proc.pid, signal.SIGKILL)
+                    except OSError:
+                        pass
+
+
+def _worker_processes(cluster) -> list:
+    """The worker processes (distributed's ``AsyncProcess``: ``pid``, ``exitcode``) of a LocalCluster's nannies."""
+    procs = []
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        proc = getattr(getattr(nanny, "process", None), "process", None)
+        if proc is not None:
+            procs.append(proc)
+    return procs
+
+
+#: Loggers held back by :func:`_quiet_distributed` (distributed's loggers are all named ``distributed.*``).
+_DISTRIBUTED_LOGGER = "distributed"
+
+
+@contextmanager
+def _quiet_distributed(level: int = logging.ERROR):
+    """distributed's loggers in this process show only records of ``level`` and above for the duration of the block.
+
+    The ``distributed`` logger and every ``distributed.*`` logger with a level of its own below ``level`` are
+    raised to it (the others inherit it); every level is restored on exit. Used while a cluster is closed: its
+    warnings then are shutdown chatter, not news for the user.
+    """
+    manager = logging.Logger.manager
+    names = [_DISTRIBUTED_LOGGER] + [n for n, lg in list(manager.loggerDict.items())
+                                     if n.startswith(_DISTRIBUTED_LOGGER + ".") and isinstance(lg, logging.Logger)]
+    old = {}
+    for name in names:
+        logger = logging.getLogger(name)
+        if name == _DISTRIBUTED_LOGGER or logger.level != logging.NOTSET:
+            old[name] = logger.level
+            if logger.level < level:
+                logger.setLevel(level)
+    try:
+        yield
+    finally:
+        for name, lvl in old.items():
+            logging.getLogger(name).setLevel(lvl)
 
 
 def _backend(scheduler, workers, n_jobs):

@@ -212,3 +212,40 @@ def test_check_output_dir_creates_nothing(tmp_path):
         check_output_dir(tmp_path / "f" / "out")
     with pytest.raises(ValueError, match="exists and is not a directory"):
         check_output_dir(tmp_path / "f")
+
+
+def test_quiet_distributed_holds_back_warnings_during_the_block_and_restores_every_level():
+    import logging
+
+    from psgsl_pgm.runs._runner import _quiet_distributed
+
+    records = []
+
+    class Keep(logging.Handler):
+        def emit(self, record):
+            records.append((record.name, record.levelname))
+
+    top = logging.getLogger("distributed")
+    own = logging.getLogger("distributed.psgsl_test_own_level")  # a level of its own, as dask's config sets some
+    inherits = logging.getLogger("distributed.psgsl_test_nanny")  # NOTSET: inherits from "distributed"
+    handler = Keep(level=logging.DEBUG)
+    top_level, own_level = top.level, own.level
+    top.addHandler(handler)
+    try:
+        top.setLevel(logging.INFO)
+        own.setLevel(logging.WARNING)
+        with _quiet_distributed():
+            inherits.warning("Worker process still alive after 4.0 seconds, killing")
+            own.warning("held back too")
+            own.error("an error still shows")
+            inherits.critical("and so does this")
+        assert records == [("distributed.psgsl_test_own_level", "ERROR"), ("distributed.psgsl_test_nanny", "CRITICAL")]
+        assert (top.level, own.level, inherits.level) == (logging.INFO, logging.WARNING, logging.NOTSET)
+        records.clear()
+        inherits.info("shown again after the block")
+        own.warning("so is this")
+        assert records == [("distributed.psgsl_test_nanny", "INFO"), ("distributed.psgsl_test_own_level", "WARNING")]
+    finally:
+        top.removeHandler(handler)
+        top.setLevel(top_level)
+        own.setLevel(own_level)

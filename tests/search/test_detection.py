@@ -6,16 +6,21 @@ import pytest
 from psgsl_pgm.search import DetectionModel, SearchConfig, run_closed_loop
 
 
-def _brute_region(house, cell):
+def _object_masks(house):
+    """Each object's footprint mask on the house grid, flattened (rasterised once per check, not once per cell)."""
+    return [o.mask(house.grid).ravel() for o in house.objects]
+
+
+def _brute_region(house, cell, masks=None):
     """Found region of hypothesis ``cell`` written out: the footprint of the last object holding it, else it."""
-    for mask in reversed([o.mask(house.grid) for o in house.objects]):
-        if mask.ravel()[cell]:
-            return np.flatnonzero(mask.ravel())
+    for mask in reversed(_object_masks(house) if masks is None else masks):
+        if mask[cell]:
+            return np.flatnonzero(mask)
     return np.array([cell])
 
 
-def _brute_found(house, points, cell, r):
-    centres = house.grid.cell_centres().reshape(-1, 2)[_brute_region(house, cell)]
+def _brute_found(house, points, cell, r, masks=None):
+    centres = house.grid.cell_centres().reshape(-1, 2)[_brute_region(house, cell, masks)]
     d = np.sqrt(((points[:, None, :] - centres[None]) ** 2).sum(-1)).min(axis=1)
     return d <= r
 
@@ -47,8 +52,9 @@ def test_success_rule_and_p_f_agree_on_every_cell_with_the_written_out_rule(prob
     # the rows' far cells hold no hypothesis but object cells (a footprint may reach far)
     assert not rows[:, far][:, model.owner[far] < 0].any()
     by_object, by_disc = 0, 0
+    masks = _object_masks(house)
     for c in np.unique(np.concatenate([close, others, np.flatnonzero(model.owner >= 0)])):  # (test only)
-        expect = _brute_found(house, pts, c, 0.5)
+        expect = _brute_found(house, pts, c, 0.5, masks)
         np.testing.assert_array_equal(rows[:, c], expect)
         np.testing.assert_array_equal(model.found(pts, c), expect)
         if expect.any():

@@ -3,6 +3,7 @@ every bound lies above the value it bounds (along seeded episodes in the embedde
 home, and on randomly drawn posteriors)."""
 
 import numpy as np
+import pytest
 
 from psgsl_pgm.search import SearchConfig, run_closed_loop
 from psgsl_pgm.search import _policies as P
@@ -40,6 +41,20 @@ def _along(monkeypatch, runs):
     return shares, sits
 
 
+def test_branch_and_bound_is_the_exhaustive_arg_max_in_short_episodes_of_each_belief(monkeypatch):
+    """The default run's check along episodes: one or more decisions under each belief (olfaction alone, and
+    semantics alone with the PMFS estimator and a detector that misses); semantics+rooms is checked along the
+    episode of :func:`test_branch_and_bound_on_random_posteriors`, the longer episodes are the slow test below."""
+    runs = [(("oven", 4, "space-aware-infotaxis", "olfaction"),
+             {"search": SearchConfig(found_radius=1e-3, time_budget=12.0)}),
+            (("bed", 5, "space-aware-infotaxis", "semantics", "pmfs"),
+             {"search": SearchConfig(time_budget=12.0, miss_probability=0.3)})]
+    _, sits = _along(monkeypatch, runs)
+    assert {s.variant for s in sits} == {"olfaction", "semantics"}
+    assert all(s.detection is not None for s in sits if s.variant == "semantics")  # the detector that misses
+
+
+@pytest.mark.slow
 def test_branch_and_bound_is_the_exhaustive_arg_max_along_episodes(monkeypatch):
     runs = [(("bed", 3, "space-aware-infotaxis", "semantics+rooms"),
              {"search": SearchConfig(found_radius=1e-3, time_budget=40.0)}),
@@ -53,6 +68,7 @@ def test_branch_and_bound_is_the_exhaustive_arg_max_along_episodes(monkeypatch):
     assert np.mean(shares) < 0.9  # the bounds prune: most candidates are never scored exactly
 
 
+@pytest.mark.slow
 def test_branch_and_bound_is_the_exhaustive_arg_max_in_a_large_generated_home(monkeypatch):
     from psgsl_pgm.sim import generate_house
 
