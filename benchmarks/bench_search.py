@@ -4,9 +4,9 @@ process (not a test).
 * one decision: ``choose("infotaxis", ...)`` for ``semantics+rooms`` on the embedded house — φ_G (one I(S; hit)
   per candidate position, under the fused posterior) + φ_O (semantic_information_gain over the map, summed
   over the field of view of every candidate pose) + P_f (the detection model) over every candidate pose of
-  the default :class:`SearchConfig` (the 0.5-m lattice within the 2-m horizon and the 1-m lattice over the
-  rest of the free space) — median over repeats with warm caches (views, Green's rows and found regions depend
-  on the geometry and the run only), and the first (cold) decision; the same for the 2-m horizon alone. The
+  the default :class:`SearchConfig` (the 0.5-m lattice and the finder cells of :meth:`FreeSpace.cover` within
+  the 2-m horizon, the 1-m lattice over the rest of the free space) — median over repeats with warm caches
+  (views, Green's rows and found regions depend on the geometry and the run only), and the first (cold) decision; the same for the 2-m horizon alone. The
   target is ≤ 20 ms per decision with warm caches;
 * one semantic-term evaluation p(s | z) on the same map (eq. ``prob-semantics-final``): the unit of the ratio;
 * one 1000-s house episode (``infotaxis/semantics+rooms``, seed 0, never found: found_radius = 1 mm): its real-time
@@ -149,6 +149,7 @@ def main(argv=None):
     post = beliefs.posteriors(("semantics+rooms",))[0]
     defaults = SearchConfig()
     detection = DetectionModel.from_house(world.house, defaults.found_radius)
+    space.cover(detection)  # the finder cells, as the closed loop does before its first decision
     sit = Situation(post, beliefs, "semantics+rooms", space, cell, 0.0, config.speed, config.turn_time,
                     world.gas_sensor.window, defaults.horizon, defaults.found_radius, {}, defaults.score, detection,
                     defaults.far_spacing)
@@ -230,6 +231,7 @@ def _space_aware_homes(a):
             beliefs.observe(stop, reading, wind, frames)
             post = beliefs.posteriors(("semantics+rooms",))[0]
             detection = DetectionModel.from_house(world.house, defaults.found_radius)
+            space.cover(detection)  # the finder cells, as the closed loop does before its first decision
             return Situation(post, beliefs, "semantics+rooms", space, cell, 0.0, config.speed, config.turn_time,
                              world.gas_sensor.window, defaults.horizon, defaults.found_radius, cache, defaults.score,
                              detection, defaults.far_spacing)
