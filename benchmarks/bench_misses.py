@@ -8,9 +8,9 @@ For every run of the chosen policies that did not find its source, from the run'
   (:class:`psgsl_pgm.search.DetectionModel`), over every drivable cell reachable from the last stop;
 * **P_f candidates** — the same over the candidates of the last decision (:meth:`FreeSpace.candidates` with
   the finder cells of :meth:`FreeSpace.cover`, the default :class:`psgsl_pgm.search.SearchConfig`);
-* **V_now** — space-aware infotaxis's value at the last stop, log₂(D/ℓ + 2^{max(H − disc, 0) − 1} − ½) with D
-  the expected geodesic distance to the source, ℓ = 2 r, H the entropy in bits and disc the bits of one found
-  disc (``psgsl_pgm.search._policies``), negative when the belief lies within one found diameter.
+* **V_now** — space-aware infotaxis's value at the last stop (``_SpaceAware.value`` of
+  ``psgsl_pgm.search._policies``, from the expected geodesic distance D to the source and the entropy H in bits),
+  negative when the belief lies within one found diameter.
 
 A run counts as *blind* when some reachable cell would find more than half of the belief's mass while no
 candidate finds more than 0.1 of it, and as *refused* when a candidate would find at least half of it.
@@ -26,11 +26,13 @@ from __future__ import annotations
 import argparse
 import collections
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.special import entr
 
 from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig
+from psgsl_pgm.search._policies import _SpaceAware
 from psgsl_pgm.sim import Camera, load_world
 
 CYCLE_STOPS = 30  # the stops a limit cycle is judged on
@@ -45,20 +47,22 @@ def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: Sea
     last = space.snap(stops[-1])
     dist = space.distances(last)
     reach = np.flatnonzero(space.nav.ravel() & np.isfinite(dist))
-    pf_reach = detection.rows(space.centres[reach]) @ post * (1.0 - detection.miss_probability)
     cells, _, _ = space.candidates(last, search.horizon, search.far_spacing)
-    pf_cand = detection.rows(space.centres[cells]) @ post * (1.0 - detection.miss_probability)
+
+    def p_f(cells):  # the policies' P_f (DetectionModel.found_probability)
+        return detection.found_probability(post, detection.cell_rows(cells, space.centres[cells]))
+
     ok = np.isfinite(dist)
-    ell = 2.0 * search.found_radius
-    disc = np.log2(np.pi * search.found_radius**2 / space.resolution**2)
-    h_bits = float(entr(post).sum() / np.log(2))
-    arg = float(post[ok] @ dist[ok]) / ell + 2.0 ** (max(h_bits - disc, 0.0) - 1.0) - 0.5
+    # the space-aware policy's own value (_SpaceAware.value reads only ℓ and the bits of one found disc)
+    scale = SimpleNamespace(ell=2.0 * search.found_radius,
+                            disc_bits=np.log2(np.pi * search.found_radius**2 / space.resolution**2))
+    v_now = float(_SpaceAware.value(scale, float(post[ok] @ dist[ok]), float(entr(post).sum() / np.log(2))))
     positions = {tuple(np.round(p, 3)) for p in stops[-CYCLE_STOPS:]}
     return {
         "cycle": len(positions) <= CYCLE_POSITIONS,
-        "pf_reach": float(pf_reach.max()),
-        "pf_cand": float(pf_cand.max()),
-        "v_now": float(np.log2(arg)) if arg > 0 else float("-inf"),
+        "pf_reach": float(p_f(reach).max()),
+        "pf_cand": float(p_f(cells).max()),
+        "v_now": v_now,
     }
 
 
