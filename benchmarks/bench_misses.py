@@ -76,7 +76,7 @@ def main(argv=None) -> None:
     geometry = {}
     counts = collections.Counter()
     for npz in sorted((args.out / "runs").glob("*.npz")):
-        home, condition, policy, variant = npz.name.split("__")[:4]
+        home, _, policy = npz.name.split("__")[:3]
         if policy not in args.policies or bool(np.load(npz)["found"]):
             continue
         if home not in geometry:
