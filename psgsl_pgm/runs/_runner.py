@@ -377,6 +377,8 @@ class _Interrupts:
         self.count = 0
         self.installed = threading.current_thread() is threading.main_thread()
         self._old = {}
+        self._holding = False  # inside held(): an abort waits until the block ends
+        self._held = None  # the signal number of an abort that arrived inside held()
 
     def __enter__(self):
         if self.installed:
@@ -393,10 +395,29 @@ class _Interrupts:
     def _handle(self, signum, frame):
         self.count += 1
         if self.count >= 2:
-            raise _Abort(signal.SIGINT)
+            self._abort(signal.SIGINT)
 
     def _terminate(self, signum, frame):
-        raise _Abort(signal.SIGTERM)
+        self._abort(signal.SIGTERM)
+
+    def _abort(self, signum: int):
+        if self._holding:
+            self._held = self._held or signum
+        else:
+            raise _Abort(signum)
+
+    @contextmanager
+    def held(self):
+        """Hold an abort (second Ctrl-C, SIGTERM) until the block ends, then raise it: a finished run is written
+        *and* counted, or neither, so the count a :class:`GridInterrupted` reports is the files on disk."""
+        self._holding = True
+        try:
+            yield
+        finally:
+            self._holding = False
+            if self._held is not None:
+                signum, self._held = self._held, None
+                raise _Abort(signum)
 
     @property
     def stop(self) -> bool:
@@ -769,8 +790,9 @@ def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable |
                         continue
                     if isinstance(result, _Skipped):
                         continue
-                    atomic_write(job.path, write, result)
-                    computed += 1
+                    with interrupts.held():  # the file and the count agree whenever the abort comes
+                        atomic_write(job.path, write, result)
+                        computed += 1
                     bar.update()
             if interrupts.stop:
                 raise GridInterrupted(len(done_before) + computed, total, immediate=False)

@@ -69,3 +69,29 @@ def test_sigterm_in_process_stops_at_once_and_restores_the_handlers(tmp_path):
     assert (exc.value.done, exc.value.total, exc.value.immediate, exc.value.signum) == (1, 3, True, signal.SIGTERM)
     assert str(exc.value) == "stopped by SIGTERM: 1 of 3 runs done"
     assert [p.name for p in tmp_path.iterdir()] == ["r0.json"]
+
+
+def _identity(x):
+    return {"x": x}
+
+
+def _write_then_terminate(result, fh):
+    """Write the result, then SIGTERM this process while the file is still being made (before its rename)."""
+    fh.write(json.dumps(result).encode())
+    if result["x"] == 1:
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
+def test_sigterm_while_a_result_is_written_counts_exactly_the_files_on_disk(tmp_path):
+    """An abort that arrives while a finished run is written is held until the file is in place and counted: no
+    finished run is lost, and the report's count is the files on disk whenever the signal comes (between the
+    rename and the count, it would otherwise report one run fewer than the folder holds)."""
+    from psgsl_pgm.runs._runner import GridInterrupted, GridJob, run_grid
+
+    jobs = [GridJob(tmp_path / f"r{x}.json", _identity, (x,)) for x in range(4)]
+    with pytest.raises(GridInterrupted) as exc:
+        run_grid(jobs, write=_write_then_terminate, workers=1)
+    files = sorted(p.name for p in tmp_path.iterdir())
+    assert files == ["r0.json", "r1.json"], files  # the run being written is kept, whole; nothing after it runs
+    assert json.loads((tmp_path / "r1.json").read_text()) == {"x": 1}
+    assert (exc.value.done, exc.value.total, exc.value.immediate, exc.value.signum) == (2, 4, True, signal.SIGTERM)
