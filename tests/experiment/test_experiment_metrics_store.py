@@ -26,6 +26,28 @@ def test_error_and_spread_equal_explicit_sums():
         assert spread[k] == pytest.approx(np.sqrt(var), rel=1e-10)
 
 
+def test_error_and_spread_are_the_same_bits_with_any_blas_thread_count():
+    """A grid's workers run the BLAS on one thread, a run in the main process on several: the metrics of a
+    posterior may not depend on it (a threaded GEMV moved the spread of a 200 000-cell posterior by 4e-15 m), nor
+    on whether it is computed alone or in a batch."""
+    from threadpoolctl import threadpool_limits
+
+    rng = np.random.default_rng(5)
+    h, w = 400, 500
+    p = rng.dirichlet(np.ones(h * w), size=3).reshape(3, h, w)
+    centres = rng.uniform(0.0, 30.0, (h, w, 2))
+    batch, single = [], []
+    for threads in (1, 2, 4):
+        with threadpool_limits(limits=threads, user_api="blas"):
+            batch.append(error_and_spread(p, centres, (3.0, 4.0)))
+            single.append(error_and_spread(p[1], centres, (3.0, 4.0)))
+    for got in batch[1:]:
+        assert all(np.array_equal(a, b) for a, b in zip(batch[0], got))
+    for got in single[1:]:
+        assert all(np.array_equal(a, b) for a, b in zip(single[0], got))
+    assert (single[0][0], single[0][1]) == (batch[0][0][1], batch[0][1][1])
+
+
 def test_mean_ci_is_the_student_t_interval():
     x = np.random.default_rng(0).normal(2.0, 1.5, size=12)
     lo, hi = stats.t.interval(0.95, len(x) - 1, loc=x.mean(), scale=stats.sem(x))
