@@ -20,6 +20,7 @@ import signal
 import sys
 
 __all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments",
+           "add_ontology_argument", "unit_float",
            "add_scheduler_argument", "add_workers_argument", "add_world_arguments", "interrupted", "positive_float",
            "positive_int", "seed_count", "seed_range", "worker_count", "world_sources"]
 
@@ -59,6 +60,24 @@ def positive_float(text):
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return value
+
+
+def unit_float(text):
+    """argparse type: a number in [0, 1]."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}") from None
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}")
+    return value
+
+
+def add_ontology_argument(parser) -> None:
+    """``--off-ontology``, shared by ``psgsl experiment`` and ``psgsl search``: the robot's ε."""
+    parser.add_argument("--off-ontology", type=unit_float, default=0.0, metavar="EPS",
+                        help="the robot's prior probability that a source is off its ontology (emitted by whatever "
+                        "is in its cell), mixed into p(o | s): 0 uses the ontology as it stands (default: 0)")
 
 
 def seed_count(text):

@@ -20,6 +20,7 @@ from pathlib import Path
 from . import _benchmark, _export, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
+    add_ontology_argument,
     add_scheduler_argument,
     add_workers_argument,
     add_world_arguments,
@@ -93,7 +94,7 @@ def _experiment(args) -> int:
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
     spec, names, sources = world_sources(args)
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
-    config = ExperimentConfig(stops=args.stops, **gas)
+    config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology, **gas)
     if spec is not None:
         for s in sources:  # every source must exist in this world before any run starts
             spec.resolve_source(s, spec.house(0))
@@ -228,6 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
+    add_ontology_argument(exp)
     add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)

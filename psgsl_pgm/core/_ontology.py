@@ -8,7 +8,7 @@ from types import MappingProxyType
 import numpy as np
 import yaml
 
-from .._shared._validate import SUM_RTOL, as_float_array, check_distribution, describe
+from .._shared._validate import SUM_RTOL, as_float_array, check_distribution, describe, unit_interval
 from .._shared._validate import names as _vocab_names
 from ..io._yaml import load_yaml
 
@@ -125,13 +125,42 @@ class Ontology:
         """Index of room ``name`` in :attr:`rooms`."""
         return _lookup({r: i for i, r in enumerate(self._rooms)}, name, "room")
 
-    def source_likelihood(self, gas=None) -> np.ndarray:
-        """p(o | s, γ) for one gas name, (k,); for a list of names, (len, k); for ``None`` all gases, (m, k)."""
+    def source_likelihood(self, gas=None, *, off_ontology: float = 0.0) -> np.ndarray:
+        r"""p(o | s, γ) for one gas name, (k,); for a list of names, (len, k); for ``None`` all gases, (m, k).
+
+        Parameters
+        ----------
+        gas : str, list of str or None
+        off_ontology : float in [0, 1], keyword-only
+            ε, the probability that a source is *off the ontology*: emitted by whatever is in its cell, the
+            cell's object then following the background p(o | ¬s) = :attr:`class_prior` as any other cell's
+            does. Marginalising that latent choice out of the source cell's CPD gives
+
+            .. math:: p_\varepsilon(o_{ci} | s_c, \gamma) = (1 - \varepsilon)\, p(o_{ci} | s_c, \gamma)
+                      + \varepsilon\, p(o_{ci} | \neg s_c),
+
+            so eq. ``prob-semantics-final`` with this likelihood is exact for the mixture (in Network A with
+            background β = :attr:`class_prior`, as without ε). The semantic weight of a cell becomes
+            (1 − ε) Σ_i p(o_ci | z_c) p(o_ci | s_c) / p(o_ci) + ε: no cell falls below ε times the weight of a
+            cell the camera has not seen, so an object-free source cell keeps mass that the gas can raise.
+            0 (the default): the ontology as it stands.
+
+        Examples
+        --------
+        >>> from psgsl_pgm import kitchen_ontology
+        >>> kitchen_ontology().source_likelihood("smoke", off_ontology=0.1).round(3).tolist()
+        [0.38, 0.245, 0.29, 0.065, 0.02]
+        """
+        eps = unit_interval(off_ontology, "off_ontology")
         if gas is None:
-            return self._table.copy()
-        if isinstance(gas, str):
-            return self._table[self.gas_index(gas)].copy()
-        return self._table[[self.gas_index(g) for g in gas]]
+            table = self._table.copy()
+        elif isinstance(gas, str):
+            table = self._table[self.gas_index(gas)].copy()
+        else:
+            table = self._table[[self.gas_index(g) for g in gas]]
+        if eps:
+            table = (1.0 - eps) * table + eps * self._prior  # p_ε(o | s, γ) = (1 − ε) p(o | s, γ) + ε p(o | ¬s)
+        return table
 
     def room_likelihood(self, room: str) -> np.ndarray:
         """p(o | room) for a room name, (k,)."""

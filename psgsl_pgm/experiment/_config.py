@@ -21,7 +21,7 @@ ESTIMATORS = ("infotaxis", "pmfs")
 #: (:attr:`ExperimentConfig.parameter_grid`), fitted by :func:`psgsl_pgm.experiment.calibrate`.
 PARAMETER_GRID = ((0.004, 284.0, 0.821, 0.308), (0.0131, 284.0, 0.821, 0.597), (0.04, 284.0, 1.642, 0.096))
 
-_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate", "wind_refresh"})
+_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate", "wind_refresh", "off_ontology"})
 
 #: How the robot reads its camera's labels: with its detector model estimated on reference houses, or with the
 #: simulator's own (for measuring what the estimate changes).
@@ -75,6 +75,10 @@ class ExperimentConfig:
     detector_model : {"estimated", "simulator"}
         How camera labels are read: with the detector model estimated on reference houses (the robot's own), or
         with the simulator's detector (to measure what the estimate changes).
+    off_ontology : float
+        ε in [0, 1]: the robot's prior probability that the source is off its ontology (emitted by whatever is in
+        its cell), mixed into its p(o | s, γ) by :meth:`psgsl_pgm.Ontology.source_likelihood` — for the semantic
+        term and φ_O alike. 0 (the default): the ontology as it stands.
     stops : int, optional
         Follow only the first ``stops`` stops of the tour (default: the whole tour). For quick checks and tests
         of the grid machinery; never part of a reported experiment.
@@ -93,6 +97,7 @@ class ExperimentConfig:
     parameter_grid: tuple | None = None
     wind_refresh: float = 0.05
     detector_model: str = "estimated"
+    off_ontology: float = 0.0
     stops: int | None = None
 
     def __post_init__(self):
@@ -112,15 +117,19 @@ class ExperimentConfig:
             object.__setattr__(self, f.name, v)
         if self.detector_model not in DETECTOR_MODELS:
             raise ValueError(f"detector_model must be one of {DETECTOR_MODELS}, got {self.detector_model!r}")
+        if not self.off_ontology <= 1:
+            raise ValueError(f"off_ontology must lie in [0, 1], got {self.off_ontology!r}")
         if not self.tempering <= 1 or not self.false_hit_rate < 1:
             raise ValueError(f"need tempering in (0, 1] and false_hit_rate in [0, 1), got {self.tempering!r}, "
                              f"{self.false_hit_rate!r}")
 
     def to_dict(self) -> dict:
-        """The settings as a dict (stored with every run). ``stops`` and ``parameter_grid`` appear only when set,
-        so a configuration without them has the same dict as before the options existed (its stored runs still
-        resume)."""
+        """The settings as a dict (stored with every run). ``stops``, ``parameter_grid`` and ``off_ontology``
+        appear only when set, so a configuration without them has the same dict as before the options existed
+        (its stored runs still resume)."""
         d = asdict(self)
+        if d["off_ontology"] == 0:
+            del d["off_ontology"]
         if d["parameter_grid"] is None:
             del d["parameter_grid"]
         else:

@@ -108,12 +108,15 @@ def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
     if not (np.isfinite(p).all() and (p >= 0).all() and abs(p.sum() - 1.0) < 1e-6):
         raise ValueError("posterior must be a distribution (finite, >= 0, sums to 1)")
     flat = p.ravel()
-    positive = np.flatnonzero(flat > 0)  # the zero cells come last in the order and add nothing to the sums
-    order = positive[np.argsort(-flat[positive], kind="stable")]
-    csum = np.cumsum(flat[order])
+    ranked = np.sort(flat[flat > 0])[::-1]  # the values in decreasing order (zero cells add nothing to the sums)
+    csum = np.cumsum(ranked)
     k = int(np.searchsorted(csum, mass * csum[-1] * (1 - 1e-12))) + 1  # first prefix reaching the mass
-    region = np.zeros(flat.size, bool)
-    region[order[:k]] = True
+    # the k most probable cells, ties with the k-th value taken in cell order: a sort of the values, not of the
+    # cells (a stable arg-sort is ten times slower, and the region is the same)
+    threshold = ranked[k - 1]
+    region = flat > threshold
+    tied = np.flatnonzero(flat == threshold)
+    region[tied[: k - int(np.count_nonzero(region))]] = True
     return region.reshape(p.shape)
 
 

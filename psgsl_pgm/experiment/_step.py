@@ -165,7 +165,8 @@ class VariantPosteriors:
         order = match_names(classes, ontology.classes)
         if (order < 0).any():
             raise ValueError(f"the detector's classes {classes} are not all in the ontology {ontology.classes}")
-        self.likelihood = ontology.source_likelihood(config.gas)[order]  # p(o | s, γ) in the detector's order
+        # p(o | s, γ) in the detector's order (with ε = config.off_ontology of off-ontology sources mixed in)
+        self.likelihood = ontology.source_likelihood(config.gas, off_ontology=config.off_ontology)[order]
         self.class_prior = beta = ontology.class_prior[order]  # β = p(o | ¬s)
         room_table = ontology.room_table[:, order]
         room_table = room_table / room_table.sum(axis=1, keepdims=True)

@@ -65,8 +65,11 @@ def random_problem(rng, n, k, m=1, *, max_obs=3, zeros=True, uniform_prior=False
     return Problem(L, beta, obs, g, pi, gas_prior, zeta)
 
 
-def enumerate_posterior(p: Problem) -> np.ndarray:
-    """p(S = c | z, ζ, g) by summing the joint over all k^n maps, all sources and all gases."""
+def enumerate_posterior(p: Problem, *, off_ontology: float = 0.0) -> np.ndarray:
+    """p(S = c | z, ζ, g) by summing the joint over all k^n maps, all sources and all gases.
+
+    ``off_ontology`` = ε adds a latent Ω ∈ {on, off}, p(off) = ε, summed over too: an *off* source is emitted by
+    whatever is in its cell, whose object then follows β like every other cell's."""
     n, k = p.n, p.beta.shape[0]
     zl = p.cell_lik()
     gas = p.gas_prior * np.prod(np.vstack([np.ones_like(p.gas_prior)] + list(p.zeta)), axis=0)
@@ -78,8 +81,9 @@ def enumerate_posterior(p: Problem) -> np.ndarray:
             continue
         for c in range(n):
             for gi in range(len(gas)):
-                o_term = np.prod(np.where(np.arange(n) == c, p.L[gi][o_map], p.beta[o_map]))
-                post[c] += p.pi[c] * p.g[c] * gas[gi] * o_term * z_term
+                for p_omega, source_cpd in ((1.0 - off_ontology, p.L[gi]), (off_ontology, p.beta)):
+                    o_term = np.prod(np.where(np.arange(n) == c, source_cpd[o_map], p.beta[o_map]))
+                    post[c] += p.pi[c] * p.g[c] * gas[gi] * p_omega * o_term * z_term
     return post / post.sum()
 
 

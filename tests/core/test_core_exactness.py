@@ -1,11 +1,13 @@
 """The closed form against brute force (tests/core/brute_force.py): exact with the background prior, the paper's
 approximation with the marginal prior, gas mixtures, voxel columns, room evidence and fusion priors."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from . import brute_force as bf
-from psgsl_pgm import fuse, room_evidence, semantic_source_probability, update_class_probs
+from psgsl_pgm import Ontology, fuse, room_evidence, semantic_source_probability, update_class_probs
 
 RTOL = 1e-10  # exact results: round-off only
 
@@ -42,6 +44,25 @@ def test_exact_against_full_product_on_larger_maps(seed):
     n, k, m = int(rng.integers(5, 80)), int(rng.integers(2, 9)), int(rng.integers(1, 4))
     problem = bf.random_problem(rng, n, k, m, max_obs=4)
     np.testing.assert_allclose(closed_form(problem), bf.product_posterior(problem), rtol=RTOL, atol=1e-300)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_off_ontology_likelihood_is_exact_for_the_on_off_mixture(seed):
+    """Ontology.source_likelihood(off_ontology=ε) in the closed form = enumeration over the object maps and a
+    latent on/off-ontology choice of the source (ε at both ends included)."""
+    rng = np.random.default_rng(3000 + seed)
+    n, k, m = int(rng.integers(1, 5)), int(rng.integers(2, 4)), int(rng.integers(1, 3))
+    problem = bf.random_problem(rng, n, k, m)
+    eps = (0.0, 1.0, float(rng.uniform()))[seed % 3]
+    ontology = Ontology([f"class{i}" for i in range(k - 1)] + ["other"], [f"gas{j}" for j in range(m)],
+                        problem.L, class_prior=problem.beta)
+    mixed = replace(problem, L=ontology.source_likelihood(off_ontology=eps))
+    np.testing.assert_allclose(closed_form(mixed), bf.enumerate_posterior(problem, off_ontology=eps), rtol=RTOL,
+                               atol=0)
+    if 0 < eps < 1 and n > 1:  # the latent choice matters: not the posterior of either ontology alone
+        for alone in (0.0, 1.0):
+            assert not np.allclose(bf.enumerate_posterior(problem, off_ontology=alone),
+                                   bf.enumerate_posterior(problem, off_ontology=eps), rtol=1e-6, atol=0)
 
 
 def test_marginal_prior_is_an_approximation_whose_error_shrinks_with_n():

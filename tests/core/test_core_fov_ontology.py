@@ -100,3 +100,19 @@ def test_reads_the_labs_room_table_as_partial_rows():
     ont = Ontology.from_dict({"classes": classes, "gases": {"smoke": {"oven": 1.0}}, "rooms": rooms})
     assert ont.rooms == ("Kitchen", "Bathroom", "Bedroom")
     assert ont.room_likelihood("Kitchen")[ont.class_index("oven")] == pytest.approx(0.2)
+
+
+def test_off_ontology_likelihood_mixes_in_the_background_and_refuses_a_bad_rate():
+    ont = kitchen_ontology()
+    plain = ont.source_likelihood("smoke")
+    assert np.array_equal(ont.source_likelihood("smoke", off_ontology=0), plain)  # ε = 0: the same bits
+    mixed = ont.source_likelihood(off_ontology=0.25)  # every gas, (m, k)
+    np.testing.assert_allclose(mixed, 0.75 * ont.source_table + 0.25 * ont.class_prior, rtol=1e-15)
+    np.testing.assert_allclose(mixed.sum(axis=1), 1.0, rtol=1e-15)
+    np.testing.assert_array_equal(ont.source_likelihood(["smoke"], off_ontology=1.0), ont.class_prior[None])
+    for bad in (-0.1, 1.5, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=r"off_ontology must"):
+            ont.source_likelihood("smoke", off_ontology=bad)
+    for bad in (True, "0.1", 0.1j, None):
+        with pytest.raises(TypeError, match="off_ontology"):
+            ont.source_likelihood("smoke", off_ontology=bad)

@@ -43,3 +43,37 @@ def test_mapper_beliefs_get_the_room_evidence_in_semantics_plus_rooms(house):
     # and it reaches the posteriors: the two semantic variants differ
     plain, rooms = beliefs.posteriors(("semantics", "semantics+rooms"))
     assert np.max(np.abs(plain - rooms)) > 0.1 * plain.max()
+
+
+def test_off_ontology_mixes_the_robots_ontology_and_keys_its_runs(house):
+    """ExperimentConfig(off_ontology=ε): the robot's p(o | s, γ) is (1 − ε) p(o | s, γ) + ε β, so each cell's
+    semantic weight is (1 − ε) Σ_i q_ci p(o_i | s) / β_i + ε, checked by hand; ε = 0 leaves the stored config
+    as it was; a rate outside [0, 1] is refused by name."""
+    import pytest
+
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.experiment._step import VariantPosteriors
+    from psgsl_pgm.sim import make_world
+
+    from psgsl_pgm.experiment._step import visit
+
+    world = make_world(house, seed=0, warm_up=1.0)
+    plain = VariantPosteriors(world, "infotaxis", ExperimentConfig())
+    mixed = VariantPosteriors(world, "infotaxis", ExperimentConfig(off_ontology=0.2))
+    stop = (5.0, 6.0)  # the hallway: the camera sees the living room and the kitchen's door
+    seen = visit(world, stop, np.linspace(0.0, 2 * np.pi, 8, endpoint=False), ExperimentConfig())
+    plain.observe(stop, *seen)
+    mixed.observe(stop, *seen)
+    np.testing.assert_allclose(mixed.likelihood, 0.8 * plain.likelihood + 0.2 * plain.class_prior, rtol=1e-15)
+    for variant in ("semantics", "semantics+rooms"):
+        q = mixed.maps[variant].probs
+        weight = 0.8 * (q @ (plain.likelihood / plain.class_prior)) + 0.2  # (1 − ε) r_c + ε
+        np.testing.assert_allclose(mixed.semantic(variant), weight / weight.sum(), rtol=1e-10, atol=0)
+        assert not np.allclose(plain.semantic(variant), mixed.semantic(variant), rtol=1e-3)
+    assert "off_ontology" not in ExperimentConfig().to_dict()
+    assert ExperimentConfig(off_ontology=0.2).to_dict()["off_ontology"] == 0.2
+    for bad in (1.5, -0.1, float("nan")):
+        with pytest.raises(ValueError, match="off_ontology"):
+            ExperimentConfig(off_ontology=bad)
+    with pytest.raises(TypeError, match="off_ontology"):
+        ExperimentConfig(off_ontology=True)
