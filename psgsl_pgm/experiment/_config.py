@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
 from .._shared._validate import positive, real_pair
 from ..olfaction._infotaxis import _parameter_grid
+from ..runs._key import OMIT_DEFAULT
 
 __all__ = ["ESTIMATORS", "ExperimentConfig", "PARAMETER_GRID", "VARIANTS", "parse_source"]
 
@@ -97,7 +98,7 @@ class ExperimentConfig:
     parameter_grid: tuple | None = None
     wind_refresh: float = 0.05
     detector_model: str = "estimated"
-    off_ontology: float = 0.0
+    off_ontology: float = field(default=0.0, metadata={OMIT_DEFAULT: True})
     stops: int | None = None
 
     def __post_init__(self):

@@ -27,7 +27,7 @@ import hashlib
 import json
 from pathlib import Path
 
-__all__ = ["digest", "file_sha256", "key_differences", "run_key", "world_key"]
+__all__ = ["OMIT_DEFAULT", "digest", "file_sha256", "key_differences", "run_key", "world_key"]
 
 _CHUNK = 1 << 20
 
@@ -103,9 +103,18 @@ def world_key(path=None) -> dict:
     return {f"world.{k}": v for k, v in flat.items()}
 
 
+#: a dataclass field with this metadata flag is left out of a key while it holds its default: an option added to
+#: a config keys its runs only when used, and the folders stored before it existed still resume
+OMIT_DEFAULT = "omit_from_key_when_default"
+
+
 def _settings(prefix: str, config) -> dict:
     if dataclasses.is_dataclass(config):
-        config = dataclasses.asdict(config)
+        values = dataclasses.asdict(config)
+        for f in dataclasses.fields(config):
+            if f.metadata.get(OMIT_DEFAULT) and values[f.name] == f.default:
+                del values[f.name]
+        config = values
     return {f"{prefix}.{k}": v for k, v in _flatten(_plain(dict(config)), "", {}).items()}
 
 

@@ -79,3 +79,24 @@ def test_no_empty_paired_json_and_the_start_used_is_stored(tmp_path):
     assert main(_args(world, out, "--seeds", "2", "--policies", "tour", "greedy")) == 0
     paired = json.loads((group / "paired.json").read_text())
     assert set(paired) == {"greedy/olfaction - tour/olfaction"}
+
+
+def test_off_ontology_is_part_of_the_key_and_reaches_the_robot(tmp_path, capsys):
+    """--off-ontology ε: stored in the run's experiment config and its key; another ε in the same folder is
+    refused with both values; ε = 0 keys the runs as before the option existed."""
+    world, _ = write_full_world(tmp_path / "w", beliefs=False)
+    out = tmp_path / "out"
+    assert main(_args(world, out, "--variants", "semantics", "--off-ontology", "0.1")) == 0
+    (path,) = sorted((out / "runs").glob("*.npz"))
+    run = load_search_run(path)
+    assert run.config["experiment"]["off_ontology"] == 0.1
+    assert run.config["key"]["experiment.off_ontology"] == 0.1
+    tree = _tree(out)
+    capsys.readouterr()
+    assert main(_args(world, out, "--variants", "semantics", "--off-ontology", "0.2")) == 2
+    assert "experiment.off_ontology: 0.1 → 0.2" in capsys.readouterr().err
+    assert _tree(out) == tree
+    plain = tmp_path / "plain"
+    assert main(_args(world, plain, "--off-ontology", "0")) == 0
+    (path,) = sorted((plain / "runs").glob("*.npz"))
+    assert not any("off_ontology" in k for k in load_search_run(path).config["key"])
