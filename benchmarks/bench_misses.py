@@ -19,6 +19,7 @@ Usage::
 
     python benchmarks/bench_misses.py bench-50x5                       # generated homes (OUT/houses/*/world.yaml)
     python benchmarks/bench_misses.py bench-B --world house_B/world.yaml  # one world file
+    python benchmarks/bench_misses.py closed-loop-pmfs --world psgsl_pgm/data/worlds/house.yaml  # psgsl search
 """
 
 from __future__ import annotations
@@ -68,17 +69,20 @@ def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: Sea
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("out", type=Path, help="a psgsl benchmark output folder")
-    ap.add_argument("--world", type=Path, help="the world file of a one-world benchmark (default: OUT/houses)")
+    ap.add_argument("out", type=Path, help="a psgsl benchmark or psgsl search output folder")
+    ap.add_argument("--world", type=Path, help="the world file of a one-world benchmark or of a psgsl search folder "
+                    "(the embedded house: psgsl_pgm/data/worlds/house.yaml; default: OUT/houses)")
     ap.add_argument("--policies", nargs="+", default=["infotaxis", "space-aware-infotaxis"])
     args = ap.parse_args(argv)
     search = SearchConfig()
     geometry = {}
     counts = collections.Counter()
     for npz in sorted((args.out / "runs").glob("*.npz")):
-        home, _, policy = npz.name.split("__")[:3]
-        if policy not in args.policies or bool(np.load(npz)["found"]):
+        run = np.load(npz)
+        policy = str(run["policy"])  # stored with the run: benchmark and search folders name their files differently
+        if policy not in args.policies or bool(run["found"]):
             continue
+        home = "world" if args.world is not None else npz.name.split("__")[0]  # a benchmark run file: home first
         if home not in geometry:
             world = args.world if args.world is not None else args.out / "houses" / home / "world.yaml"
             house = load_world(world).house()
