@@ -20,9 +20,9 @@ import signal
 import sys
 
 __all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments",
-           "add_ontology_argument", "unit_float",
-           "add_scheduler_argument", "add_workers_argument", "add_world_arguments", "interrupted", "positive_float",
-           "positive_int", "seed_count", "seed_range", "worker_count", "world_sources"]
+           "add_ontology_argument", "add_scheduler_argument", "add_workers_argument", "add_world_arguments",
+           "interrupted", "positive_float", "positive_int", "seed_count", "seed_range", "unit_float", "worker_count",
+           "world_sources"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130

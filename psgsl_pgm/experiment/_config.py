@@ -129,8 +129,9 @@ class ExperimentConfig:
         appear only when set, so a configuration without them has the same dict as before the options existed
         (its stored runs still resume)."""
         d = asdict(self)
-        if d["off_ontology"] == 0:
-            del d["off_ontology"]
+        for f in fields(self):  # options added later, left out at their default (as in their run keys)
+            if f.metadata.get(OMIT_DEFAULT) and d[f.name] == f.default:
+                del d[f.name]
         if d["parameter_grid"] is None:
             del d["parameter_grid"]
         else:
