@@ -9,8 +9,8 @@ For every run of the chosen policies that did not find its source, from the run'
 * **P_f candidates** — the same over the candidates of the last decision (:meth:`FreeSpace.candidates` with
   the finder cells of :meth:`FreeSpace.cover`, the default :class:`psgsl_pgm.search.SearchConfig`);
 * **V_now** — space-aware infotaxis's value at the last stop (``_SpaceAware.value`` of
-  ``psgsl_pgm.search._policies``, from the expected geodesic distance D to the source and the entropy H in bits),
-  negative when the belief lies within one found diameter.
+  ``psgsl_pgm.search._policies``, from the expected geodesic distance past the found radius and the entropy H in
+  bits), 0 for a belief the last stop would find and positive otherwise.
 
 A run counts as *blind* when some reachable cell would find more than half of the belief's mass while no
 candidate finds more than 0.1 of it, and as *refused* when a candidate would find at least half of it.
@@ -57,7 +57,8 @@ def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: Sea
     # the space-aware policy's own value (_SpaceAware.value reads only ℓ and the bits of one found disc)
     scale = SimpleNamespace(ell=2.0 * search.found_radius,
                             disc_bits=np.log2(np.pi * search.found_radius**2 / space.resolution**2))
-    v_now = float(_SpaceAware.value(scale, float(post[ok] @ dist[ok]), float(entr(post).sum() / np.log(2))))
+    past = np.maximum(dist[ok] - search.found_radius, 0.0)  # the distance past the found radius
+    v_now = float(_SpaceAware.value(scale, float(post[ok] @ past), float(entr(post).sum() / np.log(2))))
     positions = {tuple(np.round(p, 3)) for p in stops[-CYCLE_STOPS:]}
     return {
         "cycle": len(positions) <= CYCLE_POSITIONS,
@@ -96,8 +97,6 @@ def main(argv=None) -> None:
         kind = ("refused" if m["pf_cand"] >= 0.5 else
                 "blind" if m["pf_reach"] > 0.5 and m["pf_cand"] <= 0.1 else "spread")
         counts[policy, "limit cycle" if m["cycle"] else "moving", kind] += 1
-        if m["v_now"] < 0:
-            counts[policy, "V_now < 0", kind] += 1
         print(f"{npz.stem}: cycle {m['cycle']}, P_f reachable {m['pf_reach']:.3f}, candidates {m['pf_cand']:.3f}, "
               f"V_now {m['v_now']:.2f}")
     print("\n| policy | end | belief | runs |\n|---|---|---|---|")

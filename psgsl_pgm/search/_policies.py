@@ -15,9 +15,10 @@ decision by the branching factor per level while still seeing only a few metres 
 matches the found diameter 2r (a candidate every found disc), keeps ≈ 100 candidates in the embedded house,
 and a decision is one pass of the same gains over them; the robot re-plans at every stop, so a far target is
 only a direction until it is within the horizon. ``greedy`` keeps the horizon's candidates (it drives towards
-the MAP cell and re-plans every ``horizon`` metres). The near lattice includes the finder cells of
+the MAP cell and re-plans every ``horizon`` metres). Near and far, the candidates include the finder cells of
 :meth:`FreeSpace.cover`, so that a stop can find every source a drivable cell can (the closed loop covers its
-space with its detection model before the first decision).
+space with its detection model before the first decision): a far target's P_f is then that of the stop that
+finds the hypotheses there, not of the lattice cell nearest them, which near furniture may find none of them.
 
 **P_f** is the probability of finding the source at p under the detection model of the success rule
 (:class:`psgsl_pgm.search.DetectionModel`): P_f(p) = (1 − m) Σ_{c: d(p, R(c)) ≤ r} p(c), R(c) the found region of
@@ -50,13 +51,24 @@ moves (:meth:`FreeSpace.candidates`).
   branch and bound (:func:`_choose_infotaxis`, :func:`_branch_and_bound`): upper bounds of φ_G and φ_O, then the
   exact score of the poses whose bound reaches the best one (every pose under PMFS's own update).
 * ``space-aware-infotaxis`` — Loisy & Eloy (2022): the value V = log₂(D + 2^{H−1} − ½), with D the expected
-  distance to the source and H the entropy in bits, estimates log₂ of the remaining search; in the house D is
-  the expected geodesic distance in units of the found diameter ℓ = 2 ``found_radius`` and H is counted over
-  cells of one found disc (H − log₂(π r²/Δx²), floored at 0), so that one "cell" is what one visit can rule
-  out. G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
+  distance to the source and H the entropy in bits, estimates log₂ of the remaining search. On their lattice the
+  source is found on its own cell, so a belief that has not found it has D ≥ 1 move, V ≥ 0, and V = 0 (the
+  found state) is the least value. In the house a stop finds every hypothesis within the found radius r, a move
+  rules out about one found diameter ℓ = 2r, and H is counted over cells of one found disc
+  (H − log₂(π r²/Δx²), floored at 0), so that one "cell" is what one visit can rule out; the lattice's D is then
+  1 + D_r/ℓ, with D_r = E[max(d(p, s) − r, 0)] the expected geodesic distance past the found radius (the last
+  move, the one that finds the source, counts one as on the lattice):
+
+  .. math:: V = \log_2(1 + D_r/\ell + 2^{H-1} - \tfrac12) \;\ge\; 0,
+
+  0 exactly for a belief the stop finds. (Taking D/ℓ for the lattice's D instead makes V negative within one
+  found diameter of the belief's mass, down to −∞ at D = ℓ/2, so that a stop which finds the source — value 0 —
+  scores below one that does not, and the robot circles the source.)
+  G(p) = V_now − (1 − P_f) Σ_h P(h | p, F̄) V_h(p) over the gas outcome h ∈ {miss, hit}, with D_h and H_h
   those of p(s | h, F̄) ∝ p(s) w_p(s) P(h | s) (:func:`space_aware_gain` computes them from cached rows without
   forming that belief); the semantic extension subtracts the view's expected information φ_O(p)/ln 2 bits from
-  H_h. Decided by exact branch and bound (:func:`_choose_space_aware`, :func:`_branch_and_bound`): a rigorous
+  H_h. As V_h ≥ 0, a stop that surely finds the source (P_f = 1) gains V_now, the most any stop can. Decided by
+  exact branch and bound (:func:`_choose_space_aware`, :func:`_branch_and_bound`): a rigorous
   per-tile upper bound of every pose's score, then the exact score of the few poses whose bound reaches the best
   one, the same arg max as scoring every pose; the bound needs no geodesic distances from the pose (a Dijkstra
   each), which dominated the decisions in large homes.
@@ -281,13 +293,16 @@ def _olfactory_bound(sit: Situation, cells) -> np.ndarray:
     return np.maximum(entr(p) + entr(1.0 - p) - h_low, 0.0) + 1e-9
 
 
-def _finite_distances(sit: Situation, cell: int) -> np.ndarray:
-    """(H·W,) geodesic distances from ``cell``, 0 where unreachable (no mass there), cached for the run."""
-    key = ("distance", int(cell))
+def _distances_past(sit: Situation, cell: int) -> np.ndarray:
+    """(H·W,) max(d(cell, s) − r, 0), the geodesic distance from ``cell`` past the found radius r, 0 where
+    unreachable (no mass there), cached for the run (the distances of space-aware infotaxis's value)."""
+    key = ("past", int(cell), float(sit.found_radius))
     d = sit.cache.get(key)
     if d is None:
         d = sit.space.distances(cell)
-        d = sit.cache[key] = np.where(np.isfinite(d), d, 0.0)
+        d = np.where(np.isfinite(d), np.maximum(d - sit.found_radius, 0.0), 0.0)
+        d.flags.writeable = False
+        sit.cache[key] = d
     return d
 
 
@@ -498,9 +513,8 @@ class _SpaceAware:
         self.post = post = sit.posterior.ravel()
         self.ell = 2.0 * sit.found_radius
         self.disc_bits = np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
-        self.dist_now = dist_now = space.distances(sit.cell)
-        ok = np.isfinite(dist_now)
-        self.v_now = self.value(float(post[ok] @ dist_now[ok]), float(entr(post).sum() / np.log(2)))
+        self.dist_now = _distances_past(sit, sit.cell)
+        self.v_now = self.value(float(post @ self.dist_now), float(entr(post).sum() / np.log(2)))
         self.a = 1.0 - _detection(sit).miss_probability  # w = 1 − a on the hypotheses found at p, 1 elsewhere
         self.e_w = float(entr(1.0 - self.a))  # entr(w) on those hypotheses (0 for a detector that never misses)
         self.e = entr(post)
@@ -508,10 +522,13 @@ class _SpaceAware:
         self.gain = _semantic_gain(sit)  # I(S; O_n) per cell, None for olfaction
 
     def value(self, d, h_bits):
-        """V = log₂(D/ℓ + 2^{max(H − disc, 0) − 1} − ½), and the argument itself where it is not positive."""
-        arg = d / self.ell + 2.0 ** (np.maximum(h_bits - self.disc_bits, 0.0) - 1.0) - 0.5
+        """V = log₂(1 + d/ℓ + 2^{max(H − disc, 0) − 1} − ½) of the expected distance d past the found radius (m)
+        and the entropy H (bits) — 0 for a belief the stop finds, and the argument itself where it is not positive
+        (never, for d ≥ 0)."""
+        arg = d / self.ell + 2.0 ** (np.maximum(h_bits - self.disc_bits, 0.0) - 1.0) + 0.5
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
+
 
 def _space_aware_own_update(sit: Situation, sa: _SpaceAware, cells, p_f, rows, factors) -> np.ndarray:
     """:func:`space_aware_gain` for an estimator that updates by its own factors L_h (PMFS): each outcome's
@@ -527,7 +544,7 @@ def _space_aware_own_update(sit: Situation, sa: _SpaceAware, cells, p_f, rows, f
         mass = u.sum()
         if not mass > 0:
             continue
-        d = _finite_distances(sit, c)
+        d = _distances_past(sit, c)
         z_hit = float(_hit_rows(sit, [c])[0] @ u)
         for prob, log_l in ((mass - z_hit, f[0]), (z_hit, f[1])):  # P(h | p, F̄) · mass, log L_h
             if not prob > 0:
@@ -547,7 +564,7 @@ def _space_aware_values(sit: Situation, sa: _SpaceAware, cells, p_f, rows, phi_o
     dense = np.empty((k_n, 6))  # per candidate: L·p, L·e, H_b·p, entr(L)·p, (L∘d)·p, d·p  (L = P(hit), e = entr(p))
     corr = np.empty((k_n, 8))  # the same six over the hypotheses the candidate finds, then Σp and Σe there
     for k, (block, row, c) in enumerate(zip(_hit_blocks(sit, cells), rows, np.asarray(cells).tolist())):
-        d = _finite_distances(sit, c)  # loop over candidates (tens): products on cached rows, no copies
+        d = _distances_past(sit, c)  # loop over candidates (tens): products on cached rows, no copies
         lpe = block[0] @ pe
         ld = block[0] * d
         dense[k] = (lpe[0], lpe[1], block[1] @ post, block[2] @ post, ld @ post, d @ post)
@@ -609,8 +626,8 @@ def _space_aware_tiles(sit: Situation, cells) -> np.ndarray:
 
 
 def _space_aware_stack(sit: Situation, cells):
-    """(K, 4, T + 1) :func:`_space_aware_tiles` and, per candidate, the tiles' distance floors δ, the tiles sorted
-    by δ and δ in that order ((K, T + 1) each, :meth:`FreeSpace.tile_distance_floor`), kept in the run cache for
+    """(K, 4, T + 1) :func:`_space_aware_tiles` and, per candidate, the tiles' floors δ of the distance past the
+    found radius (:func:`_distances_past`), the tiles sorted by δ and δ in that order ((K, T + 1) each, :meth:`FreeSpace.tile_distance_floor`), kept in the run cache for
     the last candidate set only (a decision repeated at the same cell; emptied with the rows when the plume model
     changes)."""
     _hit_rows(sit, cells)  # first: empties the cache if the plume model changed
@@ -619,7 +636,7 @@ def _space_aware_stack(sit: Situation, cells):
     if hit is not None and hit[0] == key and np.array_equal(hit[1], cells):
         return hit[2:]
     floors = [sit.space.tile_distance_floor(c) for c in np.asarray(cells).tolist()]
-    delta = np.stack([f[0] for f in floors])
+    delta = np.maximum(np.stack([f[0] for f in floors]) - sit.found_radius, 0.0)  # ≤ max(d − r, 0), same order
     near_first = np.stack([f[1] for f in floors])
     out = (_space_aware_tiles(sit, cells), delta, near_first, np.take_along_axis(delta, near_first, axis=1))
     sit.cache["sa-stack"] = (key, np.array(cells)) + out
@@ -635,8 +652,9 @@ def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive,
     D and H where its argument is positive. Computed for each candidate (one product of its row with p and
     entr(p), as in :func:`space_aware_gain`): Z_h and the part ℓ_h·entr(u) of the entropy's numerator; φ_O is
     given. Bounded per tile t, with U_t the tile's sum of u (tile sums of p corrected on the found hypotheses),
-    ℓ_h ∈ [lo_t, hi_t] on it (hit; [1 − hi_t, 1 − lo_t] for a miss) and d_p ≥ δ_t
-    (:meth:`FreeSpace.tile_distance_floor`): u·entr(ℓ_h) ≥ Σ U_t min(entr(lo_t), entr(hi_t)) (entr is concave),
+    ℓ_h ∈ [lo_t, hi_t] on it (hit; [1 − hi_t, 1 − lo_t] for a miss) and d_p (the distances past the found radius,
+    max(d − r, 0)) ≥ δ_t = max(floor_t − r, 0) (:meth:`FreeSpace.tile_distance_floor`, and max(· − r, 0) is
+    non-decreasing): u·entr(ℓ_h) ≥ Σ U_t min(entr(lo_t), entr(hi_t)) (entr is concave),
     and (ℓ_h ∘ d_p)·u = Σ_t W_t d̄_t with W_t = Σ_{s ∈ t} ℓ_h u ∈ [lo_t U_t, hi_t U_t], Σ W_t = Z_h, d̄_t ≥ δ_t: at
     least the least Σ W_t δ_t under those constraints (the mass above the lower ends poured into the tiles
     nearest first). Every computed sum differs from its exact value by at most err = 8 ε (H·W + |found|) times
@@ -673,7 +691,7 @@ def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive,
     a_hit = sums[:, 1] - a * sums[:, 3] + e_w * sums[:, 2]  # ℓ_hit · entr(u)
     a_all = (e.sum() - a * sums[:, 5]) + e_w * sums[:, 4]  # Σ entr(u)
     # rounding of the computed sums: terms of magnitude ≤ p (1 + d) and e + p (2 + e_w), H·W + |found| of them
-    d_max = 2.0 * (np.asarray(drive, dtype=np.float64) + float(np.max(sa.dist_now[np.isfinite(sa.dist_now)]))) + 1.0
+    d_max = 2.0 * (np.asarray(drive, dtype=np.float64) + float(np.max(sa.dist_now)) + sit.found_radius) + 1.0
     scale = 2.0 * float(np.abs(post).sum()) * (3.0 + e_w + d_max) + 2.0 * float(e.sum())
     err = 8.0 * _EPS * (post.size + sizes) * scale
     # per tile: the lower ends of W_t (hit: lo U, miss: U − hi U) and the room above them, (hi − lo) U, for both
@@ -700,7 +718,7 @@ def _space_aware_bound(sit: Situation, sa: _SpaceAware, cells, p_f, rows, drive,
             h_lo = h_lo / np.log(2) - 1e-9 * (1.0 + np.abs(h_lo))
             d_lo = np.maximum(dn_lo, 0.0) / np.where(z_hi > 0, z_hi, 1.0)
             h_eff = np.maximum(h_lo[:, None] - phi_o_bits * (1.0 + 1e-12) - 1e-12 - sa.disc_bits, 0.0)
-            arg = (d_lo[:, None] / sa.ell + 2.0 ** (h_eff - 1.0) - 0.5) * (1.0 - 1e-9)
+            arg = (d_lo[:, None] / sa.ell + 2.0 ** (h_eff - 1.0) + 0.5) * (1.0 - 1e-9)
             v_lo = np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), -np.inf)
             term = np.where(v_lo >= 0, (np.maximum(z_lo, 0.0) / norm)[:, None] * v_lo, (z_hi / norm)[:, None] * v_lo)
         term = np.where((z_hi <= 0)[:, None], 0.0, term)  # an outcome of no mass adds nothing

@@ -255,9 +255,9 @@ class FreeSpace:
         is too coarse for point sources (a finer ``spacing`` is the remedy, not a finder cell at every drivable
         cell), and only object footprints — every cell of one found together — get finder cells.
 
-        The far lattice is not changed: it only steers the robot into the horizon, where the finder cells are
-        candidates. The finder cells depend on the geometry and r only; they are computed once per found radius,
-        and calling ``cover`` with another radius replaces them (the lattice is the base lattice plus the finder
+        The finder cells are candidates beyond the horizon too (:meth:`candidates`): a far target then carries
+        the P_f of the stop that finds the hypotheses there. The finder cells depend on the geometry and r only;
+        they are computed once per found radius, and calling ``cover`` with another radius replaces them (the lattice is the base lattice plus the finder
         cells of the last radius, so a shared space gives every run of that radius the same candidates).
 
         Parameters
@@ -336,7 +336,8 @@ class FreeSpace:
             m (geodesic) within which the candidates are the lattice of ``spacing``.
         far_spacing : float, optional
             Beyond ``horizon``: every navigable cell of a lattice of this spacing in the whole reachable free
-            space, at its geodesic distance (None: none beyond the horizon).
+            space, and every finder cell of :meth:`cover`, at its geodesic distance (None: none beyond the
+            horizon).
 
         Returns
         -------
@@ -361,7 +362,8 @@ class FreeSpace:
         near = np.isfinite(dist) & (dist <= horizon)
         lat = np.flatnonzero(self.lattice.ravel() & near)
         if far_spacing is not None:
-            far = np.flatnonzero(self.far_lattice(far_spacing).ravel() & np.isfinite(dist) & ~near)
+            targets = self.far_lattice(far_spacing) | (self.lattice & ~self._base_lattice)  # and the finder cells
+            far = np.flatnonzero(targets.ravel() & np.isfinite(dist) & ~near)
             lat = np.concatenate([lat, far])
         cells = lat[lat != cell]
         if cells.size == 0:

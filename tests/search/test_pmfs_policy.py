@@ -113,19 +113,19 @@ def test_phi_g_is_the_expected_entropy_drop_of_the_pmfs_update(corridor):
     ell, disc_bits = 1.0, np.log2(np.pi * 0.25 / RES**2)
 
     def value(d, h_bits):
-        arg = d / ell + 2.0 ** (max(h_bits - disc_bits, 0.0) - 1.0) - 0.5
-        return np.log2(arg) if arg > 0 else arg
+        return np.log2(1.0 + d / ell + 2.0 ** (max(h_bits - disc_bits, 0.0) - 1.0) - 0.5)
 
-    d_now = space.distances(cell)
-    v_now = value(float(post @ np.where(np.isfinite(d_now), d_now, 0)), h_now / np.log(2))
+    def past(d):  # the distance past the found radius r = 0.5 m, 0 where unreachable
+        return np.where(np.isfinite(d), np.maximum(d - 0.5, 0.0), 0.0)
+
+    v_now = value(float(post @ past(space.distances(cell))), h_now / np.log(2))
     for k, c in enumerate(cells):
         x = space.position(c)
         w = np.exp(detection.not_found_log_likelihood(x[None]).ravel())
         u = post * w
         p_f = 1 - u.sum()
         lik = est.hit_probability(x[None]).ravel()
-        d = space.distances(c)
-        d = np.where(np.isfinite(d), d, 0.0)
+        d = past(space.distances(c))
         total = 0.0
         for g, prob in ((False, (u @ (1 - lik)) / u.sum()), (True, (u @ lik) / u.sum())):
             after = replay()

@@ -140,8 +140,9 @@ def test_olfaction_variant_has_no_view_term(situation):
 
 
 def test_space_aware_gain_on_a_certain_belief_is_the_drive_saved(situation):
-    """All the mass on one cell: H = 0, so V = log2(D/ℓ) (ℓ = 1 m) and a nearer pose gains log2(D_now/D_p);
-    a pose within the found radius gains all of V_now."""
+    """All the mass on one cell: H = 0, so V = log2(1 + D_r/ℓ) with D_r = max(D − r, 0) the distance past the
+    found radius r = 0.5 m (ℓ = 1 m), and a nearer pose gains log2(1 + D_r,now) − log2(1 + D_r,p); a pose within the
+    found radius gains all of V_now."""
     sit = situation
     space = sit.space
     target = space.snap((4.55, 6.05))
@@ -150,14 +151,45 @@ def test_space_aware_gain_on_a_certain_belief_is_the_drive_saved(situation):
     olf = Situation(**{**sit.__dict__, "variant": "olfaction", "posterior": post.reshape(sit.posterior.shape)})
     cells, _, _ = space.candidates(sit.cell, sit.horizon)
     got = space_aware_gain(olf, cells)
-    d_now = space.distances(sit.cell)[target]
+    v_now = np.log2(1.0 + max(space.distances(sit.cell)[target] - 0.5, 0.0))
+    assert v_now > 0
     for k, c in enumerate(cells):
         d = space.distances(c)[target]
         if np.hypot(*(space.position(c) - space.position(target))) <= 0.5:
-            expect = np.log2(d_now)  # found there: the rest costs nothing
+            expect = v_now  # found there: the rest costs nothing
         else:
-            expect = np.log2(d_now) - np.log2(d)
-        np.testing.assert_allclose(got[k], expect, rtol=1e-9)
+            expect = v_now - np.log2(1.0 + (d - 0.5))
+        np.testing.assert_allclose(got[k], expect, rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("offset", [0.6, 0.8, 1.2])
+def test_a_stop_that_surely_finds_the_source_gains_the_most(situation, offset):
+    """The value is 0 for a found belief and positive otherwise, so no stop gains more than V_now and one that
+    surely finds the source (P_f = 1) gains exactly V_now — also when the belief's mass lies between r and ℓ
+    from the robot, where log2(D/ℓ + 2^{H−1} − ½) was negative and a stop that does not find the source won."""
+    from psgsl_pgm.search._policies import _found_mass, _SpaceAware
+
+    sit = situation
+    space = sit.space
+    cells, _, _ = space.candidates(sit.cell, sit.horizon)
+    here = space.position(sit.cell)
+    gap = np.abs(np.linalg.norm(space.position(cells) - here, axis=1) - offset)
+    target = int(cells[int(np.argmin(gap))])  # a lattice stop about ``offset`` m from the robot
+    near = space.disc(target, 0.15)
+    post = np.zeros(sit.posterior.size)
+    post[near[space.free[near]]] = 1.0
+    post /= post.sum()
+    olf = Situation(**{**sit.__dict__, "variant": "olfaction", "posterior": post.reshape(sit.posterior.shape),
+                       "cache": {}})
+    got = space_aware_gain(olf, cells).max(axis=1)
+    p_f, _ = _found_mass(olf, cells)
+    v_now = float(_SpaceAware(olf).v_now)
+    assert v_now >= 0
+    assert (got <= v_now + 1e-12).all()
+    sure = p_f == 1.0
+    assert sure[list(cells).index(target)]
+    np.testing.assert_allclose(got[sure], v_now, rtol=0, atol=1e-12)
+    assert np.argmax(got) in np.flatnonzero(sure)
 
 
 @pytest.mark.parametrize("policy, gain_of, differ", [("infotaxis", infotaxis_gain, True),
@@ -217,7 +249,8 @@ def test_far_candidates_cover_the_free_space_beyond_the_horizon(house_space):
     full = dijkstra(space.graph, indices=cell)
     np.testing.assert_array_equal(cells[: len(near)], near)  # the horizon's candidates first, unchanged
     far = cells[len(near):]
-    expect = np.flatnonzero(space.far_lattice(1.0).ravel() & np.isfinite(full) & (full > 2.0))
+    finders = space.lattice & ~space._base_lattice  # finder cells (FreeSpace.cover) are far targets too
+    expect = np.flatnonzero((space.far_lattice(1.0) | finders).ravel() & np.isfinite(full) & (full > 2.0))
     np.testing.assert_array_equal(np.sort(far), expect)
     np.testing.assert_allclose(drive, full[cells], rtol=1e-12)
     rooms = {int(space.house.room_labels.ravel()[c]) for c in far}
@@ -245,12 +278,12 @@ def _space_aware_direct(sit, cells, miss):
     ell, disc_bits = 2 * sit.found_radius, np.log2(np.pi * sit.found_radius**2 / space.resolution**2)
 
     def value(d, h):
-        arg = d / ell + 2.0 ** (np.maximum(h - disc_bits, 0.0) - 1.0) - 0.5
-        return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
+        return np.log2(1.0 + d / ell + 2.0 ** (np.maximum(h - disc_bits, 0.0) - 1.0) - 0.5)
 
-    d_now = space.distances(sit.cell)
-    ok = np.isfinite(d_now)
-    v_now = value(post[ok] @ d_now[ok], entr(post).sum() / np.log(2))
+    def past(d):  # the distance past the found radius, 0 where unreachable
+        return np.where(np.isfinite(d), np.maximum(d - sit.found_radius, 0.0), 0.0)
+
+    v_now = value(post @ past(space.distances(sit.cell)), entr(post).sum() / np.log(2))
     house = space.house
     xy = space.position(cells)
     found = np.stack([_brute_found_cells(house, p, sit.found_radius) for p in xy])
@@ -259,8 +292,7 @@ def _space_aware_direct(sit, cells, miss):
     q = post * w
     q /= q.sum(axis=1, keepdims=True)
     lik = sit.beliefs.estimator.hit_probability(xy).reshape(len(cells), -1)
-    dist = np.stack([space.distances(c) for c in cells])
-    dist = np.where(np.isfinite(dist), dist, 0.0)
+    dist = past(np.stack([space.distances(c) for c in cells]))
     from psgsl_pgm.search._policies import _view_information
 
     phi = _view_information(sit, cells) / np.log(2)

@@ -118,3 +118,25 @@ def test_infotaxis_finds_a_source_that_only_a_finder_cell_reaches(home):
     run = closed_loop_in_world(tuple(oven.center), 0, "infotaxis", "olfaction", "infotaxis", world=str(path),
                                world_digest=digest(world_key(path)))
     assert run.found and run.time_to_find < 1000.0
+
+
+def test_finder_cells_beyond_the_horizon_are_candidates(home):
+    """A far target carries the P_f of the stop that finds what lies there: the far candidates are the 1-m
+    lattice and every reachable finder cell beyond the horizon."""
+    from scipy.sparse.csgraph import dijkstra
+
+    _, world, house = home
+    space = _space(world, house)
+    finders = space.cover(DetectionModel.from_house(house, 0.5))
+    cell = space.snap(world.start_for(house))
+    near, _, _ = space.candidates(cell, 2.0)
+    cells, drive, _ = space.candidates(cell, 2.0, 1.0)
+    full = dijkstra(space.graph, indices=cell)
+    beyond = finders[np.isfinite(full[finders]) & (full[finders] > 2.0)]
+    assert beyond.size > 0  # else the test is moot
+    assert np.isin(beyond, cells[len(near):]).all()
+    targets = space.far_lattice(1.0).ravel().copy()
+    targets[finders] = True
+    expect = np.flatnonzero(targets & np.isfinite(full) & (full > 2.0))
+    np.testing.assert_array_equal(cells[len(near):], expect)  # lattice order
+    np.testing.assert_allclose(drive, full[cells], rtol=1e-12)
