@@ -283,13 +283,15 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     detection = DetectionModel.from_house(house, r, miss_probability=search.miss_probability)
     truth_hypothesis = detection.source_cell(truth, world.source_object, house)
     space.cover(detection)  # stops that can find every findable source (FreeSpace.cover)
+    start_cell = space.snap(start_xy)
+    # the robot searches for a source it can find: p(s) ∝ p(s) [s findable] (FreeSpace.findable)
+    beliefs.condition(np.where(space.findable(detection, start_cell), 0.0, -np.inf))
     misses = np.random.default_rng([int(seed), 0x5EA2C4]) if search.miss_probability > 0 else None
 
     def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
         return detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), truth_hypothesis)
 
     # geodesic distance from the start to where the source counts as found
-    start_cell = space.snap(start_xy)
     d_start = space.distances(start_cell)
     reachable = space.nav.ravel() & near(space.centres)
     geodesic = float(d_start[reachable].min()) if reachable.any() else float("inf")

@@ -290,6 +290,35 @@ class FreeSpace:
             self._covered_for = r
         return finders
 
+    def findable(self, detection, cell: int) -> np.ndarray:
+        """(H·W,) bool, read-only: the hypotheses that some drivable cell reachable from ``cell`` finds under
+        ``detection``'s rule (:class:`psgsl_pgm.search.DetectionModel`: within its found radius of the
+        hypothesis's found region).
+
+        A source elsewhere can never be found — ``psgsl search`` and ``psgsl world check`` refuse one before any
+        run (:func:`psgsl_pgm.search.check_findable`) — so the closed loop's robot, which searches for a source it
+        can find, conditions its belief on this set before its first decision (p(s) ∝ p(s) [s findable]): without
+        it, mass on a cell no stop can rule out (behind furniture, in a gap narrower than the robot) stays in the
+        belief for good, and the planners shuttle beside it. Depends on the robot's map, its clearance and the
+        found radius only; cached per radius and connected component of the free space.
+        """
+        if detection.shape != self.nav.shape:
+            raise ValueError(f"detection must be on this space's grid of shape {self.nav.shape}, got shape "
+                             f"{detection.shape}")
+        if self._component is None:
+            self._component = connected_components(self.graph, directed=False)[1]
+        part = int(self._component[int(cell)])
+        key = ("findable", float(detection.found_radius), part)
+        hit = self._discs.get(key)
+        if hit is None:
+            nav = np.flatnonzero(self.nav.ravel() & (self._component == part))
+            hit = np.zeros(self.nav.size, bool)
+            for start in range(0, nav.size, 4096):  # bounded memory in large homes
+                hit |= detection.rows(self.centres[nav[start : start + 4096]]).getnnz(axis=0) > 0
+            hit.flags.writeable = False
+            self._discs[key] = hit
+        return hit
+
     def _finder_cells(self, detection) -> np.ndarray:
         """The finder cells of :meth:`cover` (loops over the finder cells only: tens per house)."""
         lattice = np.flatnonzero(self._base_lattice.ravel())

@@ -9,7 +9,8 @@ from psgsl_pgm.search._store import load_search_run, save_search_run
 
 def test_tour_in_the_closed_loop_is_the_validation_experiment_times_not_found(house_space):
     """Same world, same stops: the closed loop's posterior is the experiment's (the per-step code is shared)
-    times the "not found" likelihood of everywhere it drove, renormalised (fusion keeps the factor once)."""
+    times the indicator of the hypotheses the robot can find and the "not found" likelihood of everywhere it
+    drove, renormalised (fusion keeps the factors once)."""
     from psgsl_pgm.experiment import Tour, exploration_tour, run_search
     from psgsl_pgm.search import DetectionModel
 
@@ -27,7 +28,9 @@ def test_tour_in_the_closed_loop_is_the_validation_experiment_times_not_found(ho
     model = DetectionModel.from_house(house, 0.5)
     visited = np.isneginf(model.not_found_log_likelihood(run.path)).reshape(house.shape)
     assert visited.sum() > 100
-    expected = np.where(visited, 0.0, ref.snapshots[m][2])
+    findable = space.findable(model, space.snap(run.position[0])).reshape(house.shape)
+    assert (~findable & house.grid.free).sum() > 10  # free cells no stop can rule out
+    expected = np.where(visited | ~findable, 0.0, ref.snapshots[m][2])
     expected /= expected.sum()
     assert run.final_posterior[visited].max() == 0.0  # exactly the modelled mass: none
     np.testing.assert_allclose(run.final_posterior, expected, rtol=1e-5, atol=1e-12)  # float32 storage

@@ -140,3 +140,45 @@ def test_finder_cells_beyond_the_horizon_are_candidates(home):
     expect = np.flatnonzero(targets & np.isfinite(full) & (full > 2.0))
     np.testing.assert_array_equal(cells[len(near):], expect)  # lattice order
     np.testing.assert_allclose(drive, full[cells], rtol=1e-12)
+
+
+def test_findable_hypotheses_match_distances_to_the_reachable_drivable_cells(home):
+    """FreeSpace.findable against a distance transform: a point hypothesis is findable iff a reachable drivable
+    cell lies within r of it, an object's footprint cell iff one lies within r of the footprint."""
+    from scipy import ndimage as ndi
+    from scipy.sparse.csgraph import dijkstra
+
+    _, world, house = home
+    r = 0.5
+    space = _space(world, house)
+    detection = DetectionModel.from_house(house, r)
+    cell = space.snap(world.start_for(house))
+    got = space.findable(detection, cell)
+    reach = (space.nav.ravel() & np.isfinite(dijkstra(space.graph, indices=cell))).reshape(space.nav.shape)
+    gap = (ndi.distance_transform_edt(~reach) * space.resolution).ravel()  # to the nearest reachable drivable cell
+    expect = gap <= r + 1e-9
+    for j in np.unique(detection.owner[detection.owner >= 0]).tolist():
+        mask = detection.owner == j
+        expect[mask] = gap[detection.footprints[j]].min() <= r + 1e-9
+    hypotheses = (detection.owner >= 0) | space.free
+    np.testing.assert_array_equal(got[hypotheses], expect[hypotheses])
+    assert (space.free & ~got).any()  # some free cells no stop can rule out (else the test is moot)
+    assert space.findable(detection, cell) is got  # cached
+
+
+def test_the_closed_loop_belief_holds_no_mass_where_no_stop_finds(home):
+    """The robot searches for a source it can find: from the first record on, every variant's posterior is 0
+    on the hypotheses no reachable drivable cell finds (the factor p(s) ∝ p(s) [s findable])."""
+    from psgsl_pgm.runs._key import digest, world_key
+    from psgsl_pgm.search import SearchConfig
+    from psgsl_pgm.search._grid import closed_loop_in_world
+
+    path, world, house = home
+    oven = next(o for o in house.objects if o.name == "oven_4")
+    run = closed_loop_in_world(tuple(oven.center), 0, "tour", "semantics+rooms", "infotaxis", world=str(path),
+                               world_digest=digest(world_key(path)), search=SearchConfig(time_budget=30.0))
+    space = _space(world, house)
+    unfindable = ~space.findable(DetectionModel.from_house(house, 0.5), space.snap(world.start_for(house)))
+    post = run.final_posterior.ravel()
+    assert (post[unfindable & space.free] == 0).all()
+    assert post.sum() == pytest.approx(1.0, rel=1e-6)
