@@ -29,6 +29,14 @@ p(s | z) holds it exactly once. With m > 0 a move within reach of the true sourc
 1 − m (a draw from a generator seeded with the run's seed, used only then). The fixed tour of the validation
 experiment (``psgsl experiment``) does not apply this update: it measures estimation along a fixed path, where
 the robot is not searching.
+
+**A source the robot can find.** Before its first decision the robot conditions p(s | g) on the event that the
+source is one it can find at all, P(findable | s = c) = 1 if some drivable cell reachable from the start lies
+within r of R(c), else 0 (:meth:`FreeSpace.findable`, from its own map and the same rule). The problem is a
+search for such a source — ``psgsl search`` and ``psgsl world check`` refuse any other before a run
+(:func:`psgsl_pgm.search.check_findable`) — and without the factor, mass on cells no stop can rule out (behind
+furniture, in a gap narrower than the robot) stays in the belief for good and draws the planners to shuttle
+beside it.
 """
 
 from __future__ import annotations
