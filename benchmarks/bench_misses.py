@@ -84,16 +84,17 @@ def main(argv=None) -> None:
         if policy not in args.policies or bool(run["found"]):
             continue
         home = "world" if args.world is not None else npz.name.split("__")[0]  # a benchmark run file: home first
-        if home not in geometry:
+        seed = int(run["seed"])  # the embedded house's furniture varies with the seed (a world file's does not)
+        if (home, seed) not in geometry:
             world = args.world if args.world is not None else args.out / "houses" / home / "world.yaml"
-            house = load_world(world).house()
+            house = load_world(world).house(seed)
             space = FreeSpace(house, Camera(), clearance=search.clearance, spacing=search.spacing,
                               n_headings=search.n_headings)
             detection = DetectionModel.from_house(house, search.found_radius,
                                                   miss_probability=search.miss_probability)
             space.cover(detection)
-            geometry[home] = space, detection
-        m = classify(npz, *geometry[home], search)
+            geometry[home, seed] = space, detection
+        m = classify(npz, *geometry[home, seed], search)
         kind = ("refused" if m["pf_cand"] >= 0.5 else
                 "blind" if m["pf_reach"] > 0.5 and m["pf_cand"] <= 0.1 else "spread")
         counts[policy, "limit cycle" if m["cycle"] else "moving", kind] += 1
