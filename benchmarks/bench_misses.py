@@ -12,6 +12,10 @@ For every run of the chosen policies that did not find its source, from the run'
   ``psgsl_pgm.search._policies``, from the expected geodesic distance D to the source and the entropy H in bits),
   negative when the belief lies within one found diameter.
 
+* **unfindable mass** — the share of the final belief on hypotheses that no drivable cell reachable from the last
+  stop finds at all (behind furniture, in a gap narrower than the robot): no stop can rule them out, so this
+  mass stays in the belief whatever the robot does.
+
 A run counts as *blind* when some reachable cell would find more than half of the belief's mass while no
 candidate finds more than 0.1 of it, and as *refused* when a candidate would find at least half of it.
 
@@ -58,12 +62,14 @@ def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: Sea
     scale = SimpleNamespace(ell=2.0 * search.found_radius,
                             disc_bits=np.log2(np.pi * search.found_radius**2 / space.resolution**2))
     v_now = float(_SpaceAware.value(scale, float(post[ok] @ dist[ok]), float(entr(post).sum() / np.log(2))))
+    findable = detection.rows(space.centres[reach]).getnnz(axis=0) > 0  # found from some reachable drivable cell
     positions = {tuple(np.round(p, 3)) for p in stops[-CYCLE_STOPS:]}
     return {
         "cycle": len(positions) <= CYCLE_POSITIONS,
         "pf_reach": float(p_f(reach).max()),
         "pf_cand": float(p_f(cells).max()),
         "v_now": v_now,
+        "unfindable": float(post[~findable].sum()),
     }
 
 
@@ -83,23 +89,24 @@ def main(argv=None) -> None:
         if policy not in args.policies or bool(run["found"]):
             continue
         home = "world" if args.world is not None else npz.name.split("__")[0]  # a benchmark run file: home first
-        if home not in geometry:
+        seed = int(run["seed"])  # the embedded house's furniture varies with the seed (a world file's does not)
+        if (home, seed) not in geometry:
             world = args.world if args.world is not None else args.out / "houses" / home / "world.yaml"
-            house = load_world(world).house()
+            house = load_world(world).house(seed)
             space = FreeSpace(house, Camera(), clearance=search.clearance, spacing=search.spacing,
                               n_headings=search.n_headings)
             detection = DetectionModel.from_house(house, search.found_radius,
                                                   miss_probability=search.miss_probability)
             space.cover(detection)
-            geometry[home] = space, detection
-        m = classify(npz, *geometry[home], search)
+            geometry[home, seed] = space, detection
+        m = classify(npz, *geometry[home, seed], search)
         kind = ("refused" if m["pf_cand"] >= 0.5 else
                 "blind" if m["pf_reach"] > 0.5 and m["pf_cand"] <= 0.1 else "spread")
         counts[policy, "limit cycle" if m["cycle"] else "moving", kind] += 1
         if m["v_now"] < 0:
             counts[policy, "V_now < 0", kind] += 1
         print(f"{npz.stem}: cycle {m['cycle']}, P_f reachable {m['pf_reach']:.3f}, candidates {m['pf_cand']:.3f}, "
-              f"V_now {m['v_now']:.2f}")
+              f"V_now {m['v_now']:.2f}, unfindable mass {m['unfindable']:.3f}")
     print("\n| policy | end | belief | runs |\n|---|---|---|---|")
     for (policy, end, kind), n in sorted(counts.items()):
         print(f"| {policy} | {end} | {kind} | {n} |")
