@@ -10,7 +10,10 @@ For every run of the chosen policies that did not find its source, from the run'
   the finder cells of :meth:`FreeSpace.cover`, the default :class:`psgsl_pgm.search.SearchConfig`);
 * **V_now** — space-aware infotaxis's value at the last stop (``_SpaceAware.value`` of
   ``psgsl_pgm.search._policies``, from the expected geodesic distance past the found radius and the entropy H in
-  bits), 0 for a belief the last stop would find and positive otherwise.
+  bits), 0 for a belief the last stop would find and positive otherwise;
+* **unfindable mass** — the share of the final belief on hypotheses that no drivable cell reachable from the last
+  stop finds at all (behind furniture, in a gap narrower than the robot): no stop can rule them out, so this
+  mass stays in the belief whatever the robot does.
 
 A run counts as *blind* when some reachable cell would find more than half of the belief's mass while no
 candidate finds more than 0.1 of it, and as *refused* when a candidate would find at least half of it.
@@ -59,12 +62,14 @@ def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: Sea
                             disc_bits=np.log2(np.pi * search.found_radius**2 / space.resolution**2))
     past = np.maximum(dist[ok] - search.found_radius, 0.0)  # the distance past the found radius
     v_now = float(_SpaceAware.value(scale, float(post[ok] @ past), float(entr(post).sum() / np.log(2))))
+    findable = detection.rows(space.centres[reach]).getnnz(axis=0) > 0  # found from some reachable drivable cell
     positions = {tuple(np.round(p, 3)) for p in stops[-CYCLE_STOPS:]}
     return {
         "cycle": len(positions) <= CYCLE_POSITIONS,
         "pf_reach": float(p_f(reach).max()),
         "pf_cand": float(p_f(cells).max()),
         "v_now": v_now,
+        "unfindable": float(post[~findable].sum()),
     }
 
 
@@ -99,7 +104,7 @@ def main(argv=None) -> None:
                 "blind" if m["pf_reach"] > 0.5 and m["pf_cand"] <= 0.1 else "spread")
         counts[policy, "limit cycle" if m["cycle"] else "moving", kind] += 1
         print(f"{npz.stem}: cycle {m['cycle']}, P_f reachable {m['pf_reach']:.3f}, candidates {m['pf_cand']:.3f}, "
-              f"V_now {m['v_now']:.2f}")
+              f"V_now {m['v_now']:.2f}, unfindable mass {m['unfindable']:.3f}")
     print("\n| policy | end | belief | runs |\n|---|---|---|---|")
     for (policy, end, kind), n in sorted(counts.items()):
         print(f"| {policy} | {end} | {kind} | {n} |")
