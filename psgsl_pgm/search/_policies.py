@@ -627,8 +627,8 @@ def _space_aware_tiles(sit: Situation, cells) -> np.ndarray:
 
 def _space_aware_stack(sit: Situation, cells):
     """(K, 4, T + 1) :func:`_space_aware_tiles` and, per candidate, the tiles' floors δ of the distance past the
-    found radius (:func:`_distances_past`), the tiles sorted by δ and δ in that order ((K, T + 1) each, :meth:`FreeSpace.tile_distance_floor`), kept in the run cache for
-    the last candidate set only (a decision repeated at the same cell; emptied with the rows when the plume model
+    found radius (:func:`_distances_past`), the tiles sorted by δ and δ in that order ((K, T + 1) each,
+    :meth:`FreeSpace.tile_distance_floor`), kept in the run cache for the last candidate set only (a decision repeated at the same cell; emptied with the rows when the plume model
     changes)."""
     _hit_rows(sit, cells)  # first: empties the cache if the plume model changed
     key = (int(sit.cell), float(sit.horizon), sit.far_spacing)

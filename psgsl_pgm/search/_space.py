@@ -257,8 +257,9 @@ class FreeSpace:
 
         The finder cells are candidates beyond the horizon too (:meth:`candidates`): a far target then carries
         the P_f of the stop that finds the hypotheses there. The finder cells depend on the geometry and r only;
-        they are computed once per found radius, and calling ``cover`` with another radius replaces them (the lattice is the base lattice plus the finder
-        cells of the last radius, so a shared space gives every run of that radius the same candidates).
+        they are computed once per found radius, and calling ``cover`` with another radius replaces them (the
+        lattice is the base lattice plus the finder cells of the last radius, so a shared space gives every run of
+        that radius the same candidates).
 
         Parameters
         ----------

@@ -2,14 +2,13 @@
 of the closed loop change no number.
 
 * Golden hashes of short seeded episodes, the same whether the policies decide by branch and bound or score
-  every candidate pose (checked when they were recorded): everything the robot did and saw (times, poses, headings, hits, path, the
-  map error, the credible region's area and hits) and the final posterior. The per-step error, spread and HPD
-  level are left out: they are sums over the fused posterior, and the vectorised weight and fusion kernels add
-  those in another order than the kernels of that recording, which moves them by at most 1e-14 (m, m, mass)
-  and changes no decision (the arrays hashed here are identical under both). Floating-point results depend on
-  the numpy, scipy and OpenBLAS builds and on the CPU's SIMD (numpy's exp and log, OpenBLAS's kernels), so the
-  hashes are checked on the platforms they were recorded or reproduced on and skipped elsewhere (the reason
-  says which).
+  every candidate pose (checked when they were recorded): everything the robot did and saw (times, poses,
+  headings, hits, path, the map error, the credible region's area and hits) and the final posterior. The
+  per-step error, spread and HPD level are left out: they are sums over the fused posterior that no decision
+  reads, whose order of addition a change of the fusion kernels may alter by about 1e-14 (m, m, mass). Floating-
+  point results depend on the numpy, scipy and OpenBLAS builds and on the CPU's SIMD (numpy's exp and log,
+  OpenBLAS's kernels), so the hashes are checked on the platforms they were recorded or reproduced on and skipped
+  elsewhere (the reason says which).
 * Everywhere: the branch-and-bound decision against the exhaustive arg max of :func:`infotaxis_gain`, its bounds
   against the values, one sensor window of the compiled filament model against step-then-concentration, and
   the credible region against a full sort.
