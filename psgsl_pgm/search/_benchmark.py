@@ -71,13 +71,13 @@ def _file_keys(data: dict, wpath: Path) -> dict:
     for key, words in _FILE_KEYS.items():
         v = data.get(key)
         if isinstance(v, str) and v.strip() and v not in words:
-            data[key] = str(resolve(wpath, v, key))
+            data[key] = str(resolve(wpath, v, key).resolve())
     wind = data.get("wind")
     if isinstance(wind, dict) and "gaden_csv" in wind:
         csv = wind["gaden_csv"]
         wind = dict(wind)
-        wind["gaden_csv"] = ([str(resolve(wpath, c, "wind.gaden_csv")) for c in csv] if isinstance(csv, list)
-                             else str(resolve(wpath, csv, "wind.gaden_csv")))
+        wind["gaden_csv"] = ([str(resolve(wpath, c, "wind.gaden_csv").resolve()) for c in csv]
+                             if isinstance(csv, list) else str(resolve(wpath, csv, "wind.gaden_csv").resolve()))
         data["wind"] = wind
     return data
 

@@ -99,3 +99,21 @@ def test_tiny_benchmark_report_primary_ratio_and_resume(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "search.time_budget" in err and len(err.strip().splitlines()) == 1
     assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()} == stamps
+
+
+def test_a_relative_out_folder_gives_condition_worlds_that_load(tmp_path, monkeypatch, capsys):
+    """The condition worlds (wrong ontology, no rooms) are copies in OUT/worlds naming the home's files by absolute
+    paths, so the documented `--out bench-50x5`, a folder relative to the working directory, runs them."""
+    monkeypatch.chdir(tmp_path)
+    argv = ["benchmark", "--houses", "1", "--seeds", "1", "--rooms", "3", "--area", "45", "--policies", "infotaxis",
+            "--variants", "semantics+rooms", "--conditions", "right-ontology", "wrong-ontology", "no-rooms",
+            "--budget", "10", "--workers", "1", "--quiet", "--out", "rel"]
+    assert main(argv) == 0, capsys.readouterr().err
+    worlds = sorted((tmp_path / "rel" / "worlds").glob("h00000__*-*.yaml"))
+    worlds = [w for w in worlds if not w.name.endswith("__ontology.yaml")]
+    assert len(worlds) == 2
+    from psgsl_pgm.sim import load_world
+
+    for w in worlds:
+        load_world(w)  # every file it names exists
+    assert len(list((tmp_path / "rel" / "runs").glob("*.npz"))) == 3
