@@ -62,7 +62,7 @@ def classify(npz: Path, space: FreeSpace, detection: DetectionModel, search: Sea
                             disc_bits=np.log2(np.pi * search.found_radius**2 / space.resolution**2))
     past = np.maximum(dist[ok] - search.found_radius, 0.0)  # the distance past the found radius
     v_now = float(_SpaceAware.value(scale, float(post[ok] @ past), float(entr(post).sum() / np.log(2))))
-    findable = detection.rows(space.centres[reach]).getnnz(axis=0) > 0  # found from some reachable drivable cell
+    findable = space.findable(detection, last)  # found from some drivable cell reachable from the last stop
     positions = {tuple(np.round(p, 3)) for p in stops[-CYCLE_STOPS:]}
     return {
         "cycle": len(positions) <= CYCLE_POSITIONS,

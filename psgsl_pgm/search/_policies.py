@@ -522,12 +522,9 @@ class _SpaceAware:
         self.gain = _semantic_gain(sit)  # I(S; O_n) per cell, None for olfaction
 
     def value(self, d, h_bits):
-        """V = log₂(1 + d/ℓ + 2^{max(H − disc, 0) − 1} − ½) of the expected distance d past the found radius (m)
-        and the entropy H (bits) — 0 for a belief the stop finds, and the argument itself where it is not positive
-        (never, for d ≥ 0)."""
-        arg = d / self.ell + 2.0 ** (np.maximum(h_bits - self.disc_bits, 0.0) - 1.0) + 0.5
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(arg > 0, np.log2(np.where(arg > 0, arg, 1.0)), arg)
+        """V = log₂(1 + d/ℓ + 2^{max(H − disc, 0) − 1} − ½) ≥ 0 of the expected distance d ≥ 0 past the found
+        radius (m) and the entropy H (bits); 0 for a belief the stop finds."""
+        return np.log2(d / self.ell + 2.0 ** (np.maximum(h_bits - self.disc_bits, 0.0) - 1.0) + 0.5)
 
 
 def _space_aware_own_update(sit: Situation, sa: _SpaceAware, cells, p_f, rows, factors) -> np.ndarray:

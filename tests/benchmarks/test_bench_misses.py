@@ -5,9 +5,6 @@ import importlib.util
 from pathlib import Path
 
 import numpy as np
-import pytest
-
-pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
 ROOT = Path(__file__).resolve().parents[2]
 
