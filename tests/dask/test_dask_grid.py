@@ -15,6 +15,7 @@ from .dask_parts import free_port, wait_until, worker_env
 from psgsl_pgm.cli._main import main
 from psgsl_pgm.experiment import load_run
 
+STOPS = 24  # a run long enough that the other worker is still in one when the first is written
 GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "pmfs", "--quiet"]
 
 
@@ -44,32 +45,45 @@ def test_a_grid_on_a_real_scheduler_survives_a_killed_worker_and_equals_the_loca
     from distributed import Client
 
     remote, local = tmp_path / "remote", tmp_path / "local"
-    proc = _experiment(remote, "--stops", "8", "--scheduler", real_cluster.address)
     runs = remote / "runs"
     first_seen = {}
+    busy = []
 
     def sample():
         for name, st in _stats(runs).items():
             first_seen.setdefault(name, st)
         return proc.poll() is not None
 
-    wait_until(lambda: sample() or len(first_seen) >= 1, 300, "the first run")
-    with Client(real_cluster.address, timeout=30) as client:  # a worker that is running a run right now
-        busy = [addr for addr, keys in client.processing().items() if keys]
+    # The client watches before the grid starts: a run takes well under a second on a fast machine, so a client
+    # connected only after the first run file appears can find every run already done.
+    with Client(real_cluster.address, timeout=30) as client:
         pids = client.run(os.getpid)
-    assert busy, "no worker was running a run"
-    victim = pids[busy[0]]
-    assert victim in [w.pid for w in real_cluster.workers]
-    os.kill(victim, signal.SIGKILL)
-    wait_until(sample, 600, "the grid to finish")
-    stdout, stderr = proc.communicate()
+        proc = _experiment(remote, "--stops", str(STOPS), "--scheduler", real_cluster.address)
+        try:
+            def a_run_done_and_a_worker_busy():
+                done = sample()
+                if first_seen:  # a worker that is running a run right now, after one run was written
+                    busy[:] = [addr for addr, keys in client.processing().items() if keys]
+                return bool(busy) or done
+
+            wait_until(a_run_done_and_a_worker_busy, 300, "the first run")
+            assert busy, "the grid finished before a worker could be killed in the middle of a run"
+            victim = pids[busy[0]]
+            assert victim in [w.pid for w in real_cluster.workers]
+            os.kill(victim, signal.SIGKILL)
+            wait_until(sample, 600, "the grid to finish")
+            stdout, stderr = proc.communicate()
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.communicate()
     assert proc.returncode == 0, stderr
     assert "Traceback" not in stderr, stderr
     final = _stats(runs)
     assert len(final) == 6 and final == {n: first_seen[n] for n in final}, "a run file was written twice"
     assert not list(runs.glob("*.part")) and not list(runs.glob(".*.part"))
 
-    assert main(["experiment", *GRID, "--stops", "8", "--out", str(local), "--workers", "2"]) == 0
+    assert main(["experiment", *GRID, "--stops", str(STOPS), "--out", str(local), "--workers", "2"]) == 0
     _assert_bit_identical(remote, local)
 
 
@@ -98,7 +112,7 @@ def test_an_unreachable_scheduler_is_one_line_and_exit_2(tmp_path, capsys, monke
 @pytest.mark.slow
 def test_ctrl_c_on_a_local_cluster_keeps_finished_runs_and_resumes(tmp_path):
     out = tmp_path / "exp"
-    proc = _experiment(out, "--stops", "6", "--scheduler", "local", "--workers", "2")
+    proc = _experiment(out, "--stops", str(STOPS), "--scheduler", "local", "--workers", "2")
     wait_until(lambda: list((out / "runs").glob("*.npz")) or proc.poll() is not None, 300, "the first run")
     os.killpg(proc.pid, signal.SIGINT)  # workers included, as from a terminal
     stdout, stderr = proc.communicate(timeout=180)
@@ -111,9 +125,9 @@ def test_ctrl_c_on_a_local_cluster_keeps_finished_runs_and_resumes(tmp_path):
     done = sorted((out / "runs").glob("*.npz"))
     assert int(m.group(1)) == len(done) and 1 <= len(done) < 6
     for f in done:
-        assert load_run(f).n_steps == 6
+        assert load_run(f).n_steps == STOPS
     before = _stats(out / "runs")
-    assert main(["experiment", *GRID, "--stops", "6", "--out", str(out), "--workers", "2", "--scheduler",
+    assert main(["experiment", *GRID, "--stops", str(STOPS), "--out", str(out), "--workers", "2", "--scheduler",
                  "local"]) == 0
     after = _stats(out / "runs")
     assert len(after) == 6 and all(after[n] == st for n, st in before.items())
