@@ -1,4 +1,4 @@
-"""Ctrl-C during ``psgsl experiment`` (issue 12): stop, keep every finished run, exit 130 with one line, resume.
+"""Ctrl-C during ``psgsl experiment``: stop, keep every finished run, exit 130 with one line, resume.
 
 The signal goes to the whole process group, as a terminal's Ctrl-C does (workers included). Marked slow (a few
 grids of real runs in subprocesses); tests/runs/test_runs_runner.py covers the same logic in-process by default.
@@ -17,7 +17,8 @@ import pytest
 
 from psgsl_pgm.experiment import load_run
 
-GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "pmfs", "--stops", "4", "--quiet"]
+STOPS = 24  # runs long enough to be in progress at a Ctrl-C, and still at a second one 0.3 s later
+GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "pmfs", "--stops", str(STOPS), "--quiet"]
 TOTAL = 6
 
 
@@ -66,7 +67,7 @@ def _check_interrupted(proc, out, timeout):
     assert not list((out / "runs").glob("*.part")), "a temporary file was left behind"
     for f in files:  # every finished file is complete and loadable
         run = load_run(f)
-        assert run.n_steps == 4
+        assert run.n_steps == STOPS
     return m, lines[0]
 
 
