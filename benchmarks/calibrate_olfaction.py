@@ -7,13 +7,14 @@ The tempering of both estimators is chosen for coverage on :data:`psgsl_pgm.expe
 
 Runs the fixed tour on :data:`psgsl_pgm.experiment.CALIBRATION_RUNS` (seeds and sources never evaluated), fits
 the hit model with the wind the robot estimated from its anemometer, and prints the profile log-likelihood at
-the previous hand-set values beside the fit.
+the previous hand-set values beside the fit, and the fit with the missed-hit rate δ of the hit model as a free
+parameter (``fit_missed_hits=True``).
 """
 
 import time
 
 from psgsl_pgm.experiment import calibrate, calibration_runs, ExperimentConfig
-from psgsl_pgm.olfaction import ar1_tempering, hit_residuals, profile_log_likelihood, PlumeFit
+from psgsl_pgm.olfaction import ar1_tempering, fit_plume_parameters, hit_residuals, profile_log_likelihood, PlumeFit
 
 
 def main():
@@ -32,6 +33,9 @@ def main():
               f"5–95 %: {cov.interval[0]:.3f}–{cov.interval[1]:.3f}); coverage at ¼ ½ ¾ end "
               f"{[round(float(v), 3) for v in (b > cov.tempering).mean(axis=0)]}")
     data = calibration_runs(config=config)
+    joint = fit_plume_parameters(data, false_hit_rate=config.false_hit_rate, fit_missed_hits=True)
+    print(f"with the missed-hit rate fitted too: δ = {joint.missed_hit_rate:.4g}, D = {joint.diffusivity:.4g} m²/s, "
+          f"τ = {joint.lifetime:.4g} s, κ = {joint.encounter_scale:.4g} m²/s, log L = {joint.log_likelihood:.2f}")
     for d, tau in ((0.03, 30.0), (0.01, 300.0)):
         kappa, ll = profile_log_likelihood(data, d, tau, false_hit_rate=config.false_hit_rate)
         rho, _ = ar1_tempering(hit_residuals(data, PlumeFit(d, tau, kappa, ll), false_hit_rate=config.false_hit_rate))

@@ -14,15 +14,16 @@ Used by ``psgsl experiment`` and ``psgsl search``::
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import shlex
 import signal
 import sys
 
-__all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS", "add_found_arguments",
-           "add_ontology_argument", "add_scheduler_argument", "add_workers_argument", "add_world_arguments",
-           "interrupted", "positive_float", "positive_int", "seed_count", "seed_range", "unit_float", "worker_count",
-           "world_sources"]
+__all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS",
+           "add_found_arguments", "add_missed_hits_argument", "add_ontology_argument", "add_scheduler_argument",
+           "add_workers_argument", "add_world_arguments", "interrupted", "missed_hit_rate", "positive_float",
+           "positive_int", "seed_count", "seed_range", "unit_float", "worker_count", "world_sources"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
@@ -71,6 +72,27 @@ def unit_float(text):
     if not 0 <= value <= 1:
         raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}")
     return value
+
+
+def missed_hit_rate(text) -> float:
+    """The value of ``--missed-hit-rate``: a number in [0, 1); anything else is a :class:`ValueError` naming the
+    option (the command reports it in one line, exit code 2, before any output)."""
+    try:
+        value = float(str(text).strip())
+    except ValueError:
+        value = math.nan
+    if not 0 <= value < 1:
+        raise ValueError(f"--missed-hit-rate must be a number in [0, 1), got {str(text)!r}")
+    return value
+
+
+def add_missed_hits_argument(parser) -> None:
+    """``--missed-hit-rate``, shared by ``psgsl experiment`` and ``psgsl search``: δ of the hit model (checked by
+    :func:`missed_hit_rate` when the command runs)."""
+    parser.add_argument("--missed-hit-rate", default="0", metavar="DELTA",
+                        help="the Infotaxis estimator's probability that a reading misses the plume whatever the "
+                        "model predicts, so that one reading without a hit costs a source at most -log(DELTA) nats "
+                        "(default: 0, the hit model without it)")
 
 
 def add_ontology_argument(parser) -> None:

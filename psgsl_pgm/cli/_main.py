@@ -20,6 +20,8 @@ from pathlib import Path
 from . import _benchmark, _export, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
+    add_missed_hits_argument,
+    missed_hit_rate,
     add_ontology_argument,
     add_scheduler_argument,
     add_workers_argument,
@@ -94,7 +96,8 @@ def _experiment(args) -> int:
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
     spec, names, sources = world_sources(args)
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
-    config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology, **gas)
+    config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology,
+                              missed_hit_rate=missed_hit_rate(args.missed_hit_rate), **gas)
     if spec is not None:
         for s in sources:  # every source must exist in this world before any run starts
             spec.resolve_source(s, spec.house(0))
@@ -230,6 +233,7 @@ def build_parser() -> argparse.ArgumentParser:
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
     add_ontology_argument(exp)
+    add_missed_hits_argument(exp)
     add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)

@@ -9,6 +9,8 @@ from pathlib import Path
 from ._grid import (
     MAX_SEEDS,
     add_found_arguments,
+    add_missed_hits_argument,
+    missed_hit_rate,
     add_ontology_argument,
     add_scheduler_argument,
     add_workers_argument,
@@ -51,6 +53,7 @@ def add_parser(subparsers):
                    "(default: %(default)s)")
     add_found_arguments(p)
     add_ontology_argument(p)
+    add_missed_hits_argument(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
@@ -132,7 +135,8 @@ def _run(args) -> int:
     seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
     spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
-    config = ExperimentConfig(off_ontology=args.off_ontology, **gas)
+    config = ExperimentConfig(off_ontology=args.off_ontology, missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
+                              **gas)
     clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}
     from ..search import check_findable

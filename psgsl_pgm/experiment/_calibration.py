@@ -440,6 +440,7 @@ def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: 
         model = _fitted_model(run, fit.diffusivity, fit.lifetime, fit.encounter_scale)
         if estimator == "infotaxis":
             est = GridInfotaxis.from_model(model, tempering=1.0, false_hit_rate=false_hit_rate,
+                                           missed_hit_rate=fit.missed_hit_rate,
                                            parameter_grid=parameter_grid)
             weights = None if parameter_grid is None else est.parameter_grid[:, 3]
         else:

@@ -22,7 +22,7 @@ ESTIMATORS = ("infotaxis", "pmfs")
 #: (:attr:`ExperimentConfig.parameter_grid`), fitted by :func:`psgsl_pgm.experiment.calibrate`.
 PARAMETER_GRID = ((0.004, 284.0, 0.821, 0.308), (0.0131, 284.0, 0.821, 0.597), (0.04, 284.0, 1.642, 0.096))
 
-_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate", "wind_refresh", "off_ontology"})
+_MAY_BE_ZERO = frozenset({"warm_up", "turn_time", "false_hit_rate", "missed_hit_rate", "wind_refresh", "off_ontology"})
 
 #: How the robot reads its camera's labels: with its detector model estimated on reference houses, or with the
 #: simulator's own (for measuring what the estimate changes).
@@ -61,6 +61,11 @@ class ExperimentConfig:
         region λ = 0.314, bootstrap interval 0.28–0.70 holding this value.
     false_hit_rate : float
         ε of :class:`psgsl_pgm.olfaction.GridInfotaxis` (held fixed in the fit).
+    missed_hit_rate : float
+        δ in [0, 1) of :class:`psgsl_pgm.olfaction.GridInfotaxis`: the probability that a reading misses the plume
+        whatever the model predicts, so that one reading without a hit costs a candidate source at most −log δ
+        nats. 0 (the default): the hit model without it — on the calibration runs its maximum-likelihood value
+        (:func:`psgsl_pgm.olfaction.fit_plume_parameters` with ``fit_missed_hits=True``) is 0.
     parameter_grid : tuple of (D, τ, κ, weight), or None
         The plume parameters :class:`psgsl_pgm.olfaction.GridInfotaxis` marginalises over, with their population
         weights fitted on the calibration runs (:func:`calibrate`: the marginal maximum-likelihood mixing
@@ -95,6 +100,7 @@ class ExperimentConfig:
     tempering: float = 0.298
     pmfs_tempering: float = 0.380
     false_hit_rate: float = 0.01
+    missed_hit_rate: float = field(default=0.0, metadata={OMIT_DEFAULT: True})
     parameter_grid: tuple | None = None
     wind_refresh: float = 0.05
     detector_model: str = "estimated"
@@ -120,6 +126,8 @@ class ExperimentConfig:
             raise ValueError(f"detector_model must be one of {DETECTOR_MODELS}, got {self.detector_model!r}")
         if not self.off_ontology <= 1:
             raise ValueError(f"off_ontology must lie in [0, 1], got {self.off_ontology!r}")
+        if not self.missed_hit_rate < 1:
+            raise ValueError(f"need missed_hit_rate in [0, 1), got {self.missed_hit_rate!r}")
         if not self.tempering <= 1 or not self.false_hit_rate < 1:
             raise ValueError(f"need tempering in (0, 1] and false_hit_rate in [0, 1), got {self.tempering!r}, "
                              f"{self.false_hit_rate!r}")

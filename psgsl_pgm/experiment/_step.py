@@ -85,7 +85,8 @@ def make_estimator(name, model, config, *, prior=None):
     """The olfactory estimator ``name`` of :data:`ESTIMATORS` on ``model`` with ``config``'s settings."""
     if name == "infotaxis":
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
-                                        false_hit_rate=config.false_hit_rate, parameter_grid=config.parameter_grid)
+                                        false_hit_rate=config.false_hit_rate, missed_hit_rate=config.missed_hit_rate,
+                                        parameter_grid=config.parameter_grid)
     if name == "pmfs":
         return PMFSEstimator.from_model(model, prior=prior, tempering=config.pmfs_tempering)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")

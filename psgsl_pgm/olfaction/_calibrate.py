@@ -12,7 +12,7 @@ from scipy.optimize import brentq, minimize
 from .._shared._validate import as_array, as_float_array, describe, positive, unit_interval
 from ._plume import PlumeModel
 
-__all__ = ["CalibrationRun", "PlumeFit", "ar1_tempering", "encounter_scale_mle", "fit_encounter_scale",
+__all__ = ["CalibrationRun", "PlumeFit", "ar1_tempering", "encounter_scale_mle", "fit_encounter_scale", "fit_hit_model",
            "fit_plume_parameters", "hit_log_likelihood", "hit_residuals", "mixture_weights", "profile_log_likelihood",
            "score_tempering"]
 
@@ -206,24 +206,110 @@ class CalibrationRun:
         return field[self._cells[:, 0], self._cells[:, 1]]
 
 
-def hit_log_likelihood(predicted, hits, encounter_scale: float, false_hit_rate: float) -> float:
-    """Σ_n log P(g_n), P(hit) = ε + (1 − ε)(1 − exp(−κ c_n)), P(miss) = (1 − ε) exp(−κ c_n)."""
+def hit_log_likelihood(predicted, hits, encounter_scale: float, false_hit_rate: float,
+                       missed_hit_rate: float = 0.0) -> float:
+    """Σ_n log P(g_n), P(hit) = ε + (1 − ε)(1 − δ)(1 − exp(−κ c_n)), P(miss) = (1 − ε)[δ + (1 − δ) exp(−κ c_n)]
+    (the hit model of :class:`GridInfotaxis`; δ = ``missed_hit_rate``)."""
     mu = encounter_scale * np.asarray(predicted, dtype=np.float64)
     g = np.asarray(hits, dtype=bool)
-    with np.errstate(divide="ignore"):
-        ll_hit = np.log(-np.expm1(-mu) + false_hit_rate * np.exp(-mu))
-    ll_miss = np.log1p(-false_hit_rate) - mu
+    if missed_hit_rate == 0.0:
+        with np.errstate(divide="ignore"):
+            ll_hit = np.log(-np.expm1(-mu) + false_hit_rate * np.exp(-mu))
+        ll_miss = np.log1p(-false_hit_rate) - mu
+    else:
+        ll_hit, ll_miss = _hit_model_terms(mu, false_hit_rate, missed_hit_rate)[:2]
     return float(np.where(g, ll_hit, ll_miss).sum())
+
+
+def _hit_model_terms(mu, eps: float, delta: float):
+    """Per reading: log P(hit), log P(miss) and their derivatives in log κ and in δ, for μ = κ c (n,)."""
+    e = np.exp(-mu)
+    one_minus_e = -np.expm1(-mu)
+    p_hit = eps + (1.0 - eps) * (1.0 - delta) * one_minus_e  # P(hit) ≥ ε
+    with np.errstate(divide="ignore"):
+        ll_hit = np.log(p_hit)
+        log_q = np.logaddexp(np.log(delta) if delta > 0 else -np.inf, np.log1p(-delta) - mu)  # q = δ + (1 − δ)e^{−μ}
+    ll_miss = np.log1p(-eps) + log_q
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d_hit_k = np.where(p_hit > 0, (1.0 - eps) * (1.0 - delta) * mu * e / p_hit, 0.0)
+        d_hit_d = np.where(p_hit > 0, -(1.0 - eps) * one_minus_e / p_hit, 0.0)
+        w = np.exp(np.log1p(-delta) - mu - log_q)  # (1 − δ)e^{−μ} / q ∈ [0, 1]
+        d_miss_k = -mu * w
+        d_miss_d = np.exp(np.minimum(np.log(one_minus_e) - log_q, 700.0))  # (1 − e^{−μ}) / q
+    return ll_hit, ll_miss, d_hit_k, d_miss_k, d_hit_d, d_miss_d
+
+
+def fit_hit_model(predicted, hits, *, false_hit_rate: float = 0.0) -> tuple:
+    """Maximum-likelihood (κ, δ) of the hit model for readings with predicted c_k = G(x_k | s_k).
+
+    P(hit) = ε + (1 − ε)(1 − δ)(1 − e^{−κc}) and P(miss) = (1 − ε)[δ + (1 − δ)e^{−κc}] (:class:`GridInfotaxis`
+    with ``missed_hit_rate`` δ). With δ the log-likelihood is no longer concave in κ (a miss term is the log of a
+    sum of exponentials), so the maximum is searched by L-BFGS-B on (log κ, δ), δ ∈ [0, 1 − 10⁻⁹], with the
+    analytic gradient, from (κ̂₀, 0) — κ̂₀ the maximiser with δ = 0 (:func:`encounter_scale_mle`) — and from
+    (κ̂₀, 0.05); the better of the two, and never worse than (κ̂₀, 0), is returned. δ̂ = 0 exactly, with κ̂ = κ̂₀,
+    when the boundary is the maximum: no miss is more surprising than the model with δ = 0 can afford.
+
+    Parameters
+    ----------
+    predicted : (n,) array_like of float
+        c_k ≥ 0, s/m².
+    hits : (n,) array_like of bool
+    false_hit_rate : float, keyword-only
+        ε ∈ [0, 1), held fixed.
+
+    Returns
+    -------
+    (kappa, delta, log_likelihood) : tuple of float
+        κ̂ (m²/s), δ̂ and the maximised Σ_k log P(g_k) (nats).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> c = rng.uniform(0, 5, 4000)
+    >>> p_hit = 0.01 + 0.99 * 0.9 * (1 - np.exp(-0.8 * c))   # κ = 0.8, δ = 0.1, ε = 0.01
+    >>> kappa, delta, _ = fit_hit_model(c, rng.random(4000) < p_hit, false_hit_rate=0.01)
+    >>> bool(abs(kappa - 0.8) < 0.1), bool(abs(delta - 0.1) < 0.03)
+    (True, True)
+    """
+    c = as_float_array(predicted, "predicted", dtype=np.float64, ndim=1)
+    if not (np.isfinite(c).all() and (c >= 0).all()):
+        raise ValueError(f"predicted must be finite and >= 0, got {describe(c)}")
+    g = _hits(hits, c.shape, "predicted")
+    eps = unit_interval(false_hit_rate, "false_hit_rate", high_open=True)
+    kappa0 = encounter_scale_mle(c, g, false_hit_rate=eps)
+
+    def nll(x):
+        kappa, delta = math.exp(x[0]), float(x[1])
+        ll_hit, ll_miss, dhk, dmk, dhd, dmd = _hit_model_terms(kappa * c, eps, delta)
+        value = -float(np.where(g, ll_hit, ll_miss).sum())
+        grad = -np.array([np.where(g, dhk, dmk).sum(), np.where(g, dhd, dmd).sum()])
+        return value, grad
+
+    bounds = [(math.log(kappa0) - 20.0, math.log(kappa0) + 20.0), (0.0, 1.0 - 1e-9)]
+    best = (math.log(kappa0), 0.0)
+    best_value = nll(best)[0]
+    for start in (best, (math.log(kappa0), 0.05)):
+        res = minimize(nll, np.array(start), jac=True, method="L-BFGS-B", bounds=bounds,
+                       options={"ftol": 1e-15, "gtol": 1e-10, "maxiter": 500})
+        if res.x[1] == 0.0:  # on the boundary δ = 0, where κ̂₀ is the exact maximiser (a root, not an iterate)
+            continue
+        if np.isfinite(res.fun) and res.fun < best_value:
+            best, best_value = (float(res.x[0]), float(res.x[1])), float(res.fun)
+    return math.exp(best[0]), best[1], -best_value
 
 
 @dataclass(frozen=True)
 class PlumeFit:
-    """Maximum-likelihood plume parameters (D m²/s, τ s, κ m²/s) and the maximised log-likelihood (nats)."""
+    """Maximum-likelihood plume parameters (D m²/s, τ s, κ m²/s), the maximised log-likelihood (nats) and the
+    missed-hit rate δ of the hit model (0 unless fitted: :func:`fit_plume_parameters` with
+    ``fit_missed_hits=True``)."""
 
     diffusivity: float
     lifetime: float
     encounter_scale: float
     log_likelihood: float
+    missed_hit_rate: float = 0.0
 
 
 def profile_log_likelihood(runs, diffusivity: float, lifetime: float, *, false_hit_rate: float = 0.0):
@@ -239,7 +325,8 @@ def profile_log_likelihood(runs, diffusivity: float, lifetime: float, *, false_h
 
 
 def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.003, 0.01, 0.03, 0.1, 0.3),
-                         lifetimes=(3.0, 10.0, 30.0, 100.0, 300.0, 1000.0), refine: bool = True) -> PlumeFit:
+                         lifetimes=(3.0, 10.0, 30.0, 100.0, 300.0, 1000.0), refine: bool = True,
+                         fit_missed_hits: bool = False) -> PlumeFit:
     """Maximum-likelihood (D, τ, κ) of the hit model on calibration runs with known sources.
 
     The likelihood is Π_n P(g_n | s_true; D, τ, κ) with P(hit) = ε + (1 − ε)(1 − exp(−κ G_{D,τ}(x_n | s_true)))
@@ -256,6 +343,10 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
     around this fit with population weights from :func:`mixture_weights` (``parameter_grid``); PMFS and the
     residual tempering (:func:`ar1_tempering`) use the point estimate.
 
+    With ``fit_missed_hits`` the missed-hit rate δ of :class:`GridInfotaxis` is fitted too: at each (D, τ),
+    (κ, δ) jointly by :func:`fit_hit_model` instead of κ alone — the profile over (κ, δ), with the same search over
+    (D, τ).
+
     Parameters
     ----------
     runs : sequence of CalibrationRun
@@ -264,6 +355,8 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
     diffusivities, lifetimes : sequence of float, keyword-only
         The starting grid, m²/s and s (positive).
     refine : bool, keyword-only
+    fit_missed_hits : bool, keyword-only
+        Fit δ as well (default: δ = 0, the hit model without missed hits).
 
     Returns
     -------
@@ -277,16 +370,25 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
     ts = [positive(v, "lifetimes[i]", "s") for v in lifetimes]
     if not ds or not ts:
         raise ValueError("diffusivities and lifetimes must each hold at least one value")
+    if not isinstance(fit_missed_hits, (bool, np.bool_)):
+        raise TypeError(f"fit_missed_hits must be a bool, got {type(fit_missed_hits).__name__}")
     table = {}
+    hits = np.concatenate([r.hits for r in runs])
+
+    def profile(d, tau):  # (κ̂, log L, δ̂) at (D, τ)
+        if not fit_missed_hits:
+            return profile_log_likelihood(runs, d, tau, false_hit_rate=eps) + (0.0,)
+        c = np.concatenate([r.predicted(d, tau) for r in runs])
+        kappa, delta, ll = fit_hit_model(c, hits, false_hit_rate=eps)
+        return kappa, ll, delta
 
     def nll(x):
         key = (round(float(x[0]), 12), round(float(x[1]), 12))
         if key not in table:
             try:
-                table[key] = profile_log_likelihood(runs, float(np.exp(x[0])), float(np.exp(x[1])),
-                                                    false_hit_rate=eps)
+                table[key] = profile(float(np.exp(x[0])), float(np.exp(x[1])))
             except ValueError:  # no finite κ̂ (no hit where gas is predicted): the worst fit
-                table[key] = (math.nan, -math.inf)
+                table[key] = (math.nan, -math.inf, math.nan)
         return -table[key][1]
 
     starts = [(math.log(d), math.log(t)) for d in ds for t in ts]
@@ -296,16 +398,18 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
                        options={"xatol": 1e-3, "fatol": 1e-4, "maxiter": 200, "initial_simplex":
                                 np.array(best) + np.array([[0.0, 0.0], [0.3, 0.0], [0.0, 0.3]])})
         best = tuple(res.x) if -res.fun >= -nll(best) else best
-    kappa, ll = table[(round(float(best[0]), 12), round(float(best[1]), 12))]
-    return PlumeFit(float(np.exp(best[0])), float(np.exp(best[1])), float(kappa), float(ll))
+    kappa, ll, delta = table[(round(float(best[0]), 12), round(float(best[1]), 12))]
+    return PlumeFit(float(np.exp(best[0])), float(np.exp(best[1])), float(kappa), float(ll), float(delta))
 
 
 def hit_residuals(runs, fit: PlumeFit, *, false_hit_rate: float = 0.0) -> list:
-    """Pearson residuals r_n = (g_n − p_n) / sqrt(p_n (1 − p_n)) of each run under ``fit``, in reading order."""
+    """Pearson residuals r_n = (g_n − p_n) / sqrt(p_n (1 − p_n)) of each run under ``fit`` (its δ included), in
+    reading order."""
     out = []
     for r in runs:
         c = r.predicted(fit.diffusivity, fit.lifetime)
-        p = false_hit_rate + (1.0 - false_hit_rate) * -np.expm1(-fit.encounter_scale * c)
+        p = -np.expm1(-fit.encounter_scale * c)
+        p = false_hit_rate + (1.0 - false_hit_rate) * ((1.0 - fit.missed_hit_rate) * p)
         p = np.clip(p, 1e-12, 1 - 1e-12)
         out.append((r.hits - p) / np.sqrt(p * (1 - p)))
     return out

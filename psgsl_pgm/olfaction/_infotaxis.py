@@ -32,13 +32,18 @@ class GridInfotaxis(OlfactoryEstimator):
 
     Each reading at sensor cell x multiplies the posterior by the likelihood of every candidate source s,
 
-        P(hit | s) = ε + (1 − ε) (1 − exp(−κ G(x | s))),     P(miss | s) = (1 − ε) exp(−κ G(x | s)),
+        P(hit | s)  = ε + (1 − ε)(1 − δ)(1 − exp(−κ G(x | s))),
+        P(miss | s) = (1 − ε)[δ + (1 − δ) exp(−κ G(x | s))],
 
     i.e. Poisson encounters with mean κ G(x | s) in one sample (Vergassola et al. 2007: encounter rate
     R(r | r0) ∝ c(r | r0)), with G the adjoint Green's function of :class:`PlumeModel` (walls no-flux, outlets
-    absorbing, the map's wind field) and a false-hit probability ε (sensor noise, and model mismatch: without
+    absorbing, the map's wind field), a false-hit probability ε (sensor noise, and model mismatch: without
     it one hit where the model predicts G = 0 for the true source — e.g. a gust through a door the mean flow
-    does not carry — would exclude the true source for ever). The log-likelihoods are accumulated,
+    does not carry — would exclude the true source for ever) and a missed-hit probability δ, its mirror image:
+    with probability δ the plume of this reading is not where the mean flow puts it (a gust that carries it away,
+    a wind estimate that is wrong here), and only a false hit can register. Without δ one reading without a hit
+    where the model predicts κG ≫ 1 costs the true source κG nats; with δ a miss costs at most −log δ. δ = 0
+    (the default) is the model without it, bit for bit. The log-likelihoods are accumulated,
 
         log p(s | g_1..n) = log p(s) + β Σ_k log P(g_k | s) − log Z,
 
@@ -100,6 +105,9 @@ class GridInfotaxis(OlfactoryEstimator):
     false_hit_rate : float, default 0.01
         ε ∈ [0, 1): probability of a hit whatever the source. With ε = 0 a hit that no candidate can explain
         raises ValueError.
+    missed_hit_rate : float, default 0.0
+        δ ∈ [0, 1): probability that a reading misses the plume whatever the model predicts (see above); fitted
+        with the plume parameters by :func:`fit_plume_parameters` (``fit_missed_hits=True``).
     parameter_grid : (J, 4) array_like of float, optional
         Rows (D m²/s, τ s, κ m²/s, prior weight π_j ≥ 0) of the plume parameters to marginalise over (see
         above; weights are normalised). ``None``: the single component (D, τ, κ) of the plume model. The
@@ -141,21 +149,22 @@ class GridInfotaxis(OlfactoryEstimator):
         prior=None,
         tempering: float = 0.5,
         false_hit_rate: float = 0.01,
+        missed_hit_rate: float = 0.0,
         parameter_grid=None,
         **plume,
     ):
         model = PlumeModel(occupancy, resolution=resolution, origin=origin, wind=wind, outlets=outlets, **plume)
-        self._configure(tempering, false_hit_rate, parameter_grid)
+        self._configure(tempering, false_hit_rate, parameter_grid, missed_hit_rate)
         super().__init__(model, prior=prior)
 
     @classmethod
     def from_model(
         cls, model: PlumeModel, *, prior=None, tempering: float = 0.5, false_hit_rate: float = 0.01,
-        parameter_grid=None,
+        missed_hit_rate: float = 0.0, parameter_grid=None,
     ) -> "GridInfotaxis":
         """Estimator on an existing :class:`PlumeModel` (shares its factorisation and Green's-function cache)."""
         self = cls.__new__(cls)
-        self._configure(tempering, false_hit_rate, parameter_grid)
+        self._configure(tempering, false_hit_rate, parameter_grid, missed_hit_rate)
         OlfactoryEstimator.__init__(self, model, prior=prior)
         return self
 
@@ -165,13 +174,15 @@ class GridInfotaxis(OlfactoryEstimator):
 
         ``wind`` is the (H, W, 2) wind field in m/s; remaining keywords as in the constructor.
         """
-        opts = {k: kwargs.pop(k) for k in ("tempering", "false_hit_rate", "parameter_grid") if k in kwargs}
+        opts = {k: kwargs.pop(k) for k in ("tempering", "false_hit_rate", "missed_hit_rate", "parameter_grid")
+                if k in kwargs}
         model = PlumeModel.from_grid_map(grid_map, wind, outlets=outlets, **kwargs)
         return cls.from_model(model, prior=prior, **opts)
 
-    def _configure(self, tempering, false_hit_rate, parameter_grid=None) -> None:
+    def _configure(self, tempering, false_hit_rate, parameter_grid=None, missed_hit_rate=0.0) -> None:
         self.tempering = unit_interval(tempering, "tempering", low_open=True, high_open=False)
         self.false_hit_rate = unit_interval(false_hit_rate, "false_hit_rate", low_open=False, high_open=True)
+        self.missed_hit_rate = unit_interval(missed_hit_rate, "missed_hit_rate", low_open=False, high_open=True)
         self.parameter_grid = None if parameter_grid is None else _parameter_grid(parameter_grid)
         self._components_of = None  # the plume model the components were built on
 
@@ -268,15 +279,21 @@ class GridInfotaxis(OlfactoryEstimator):
     def _log_likelihood_flat(self, flat_cell: int, hit: bool) -> np.ndarray:
         """(J, H·W) log P_θj(g | s) of one reading at ``flat_cell`` for every component j and source s."""
         mu = self._component_rows([flat_cell])[:, 0]  # expected encounters κ_j G_j(x|s)
-        eps = self.false_hit_rate
+        eps, delta = self.false_hit_rate, self.missed_hit_rate
+        if delta == 0.0:
+            if hit:
+                with np.errstate(divide="ignore"):  # ε = 0 and G = 0 -> log 0 = −inf, intended
+                    return np.log(-np.expm1(-mu) + eps * np.exp(-mu))  # log[ε + (1−ε)(1 − e^{−κG})]
+            return np.log1p(-eps) - mu  # log[(1−ε) e^{−κG}]
         if hit:
-            with np.errstate(divide="ignore"):  # ε = 0 and G = 0 -> log 0 = −inf, intended
-                return np.log(-np.expm1(-mu) + eps * np.exp(-mu))  # log[ε + (1−ε)(1 − e^{−κG})]
-        return np.log1p(-eps) - mu  # log[(1−ε) e^{−κG}]
+            with np.errstate(divide="ignore"):  # log[ε + (1−ε)(1−δ)(1 − e^{−κG})]
+                return np.log(eps + (1.0 - eps) * (1.0 - delta) * -np.expm1(-mu))
+        # log[(1−ε)(δ + (1−δ)e^{−κG})], never below log(1−ε) + log δ
+        return np.log1p(-eps) + np.logaddexp(np.log(delta), np.log1p(-delta) - mu)
 
     def _hit_likelihood_rows(self, flat_cells: np.ndarray) -> np.ndarray:
         p = -np.expm1(-self._component_rows(flat_cells))  # (J, K, H·W)
-        p = self.false_hit_rate + (1.0 - self.false_hit_rate) * p  # P_θj(hit | s) with false hits
+        p = self.false_hit_rate + (1.0 - self.false_hit_rate) * ((1.0 - self.missed_hit_rate) * p)  # P_θj(hit | s)
         if p.shape[0] == 1:
             return p[0]
         return np.tensordot(np.exp(self._log_weights), p, axes=1)  # prior predictive Σ_j π_j P_θj(hit | s)

@@ -77,3 +77,25 @@ def test_off_ontology_mixes_the_robots_ontology_and_keys_its_runs(house):
             ExperimentConfig(off_ontology=bad)
     with pytest.raises(TypeError, match="off_ontology"):
         ExperimentConfig(off_ontology=True)
+
+
+def test_missed_hit_rate_reaches_the_estimator_and_keys_runs_only_when_set(house):
+    """ExperimentConfig(missed_hit_rate=δ): the robot's GridInfotaxis gets δ (PMFS has no such rate); δ = 0 leaves
+    the stored config as it was; a δ outside [0, 1) is refused by name."""
+    import pytest
+
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.experiment._step import VariantPosteriors
+    from psgsl_pgm.sim import make_world
+
+    world = make_world(house, seed=0, warm_up=1.0)
+    assert VariantPosteriors(world, "infotaxis", ExperimentConfig(missed_hit_rate=0.05)).estimator.missed_hit_rate \
+        == 0.05
+    assert VariantPosteriors(world, "infotaxis", ExperimentConfig()).estimator.missed_hit_rate == 0.0
+    assert "missed_hit_rate" not in ExperimentConfig().to_dict()
+    assert ExperimentConfig(missed_hit_rate=0.05).to_dict()["missed_hit_rate"] == 0.05
+    for bad in (1.0, -0.1, float("nan")):
+        with pytest.raises(ValueError, match="missed_hit_rate"):
+            ExperimentConfig(missed_hit_rate=bad)
+    with pytest.raises(TypeError, match="missed_hit_rate"):
+        ExperimentConfig(missed_hit_rate=True)

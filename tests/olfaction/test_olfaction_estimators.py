@@ -51,26 +51,58 @@ def _dense_green(model):
 
 
 # --- Infotaxis: exact Bayes ----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("beta,eps", [(1.0, 0.0), (0.5, 0.01), (0.3, 0.2)])
-def test_infotaxis_posterior_equals_brute_force_tempered_bayes(beta, eps):
+@pytest.mark.parametrize("beta,eps,delta", [(1.0, 0.0, 0.0), (0.5, 0.01, 0.0), (0.3, 0.2, 0.0), (0.5, 0.01, 0.05),
+                                            (1.0, 0.0, 0.3)])
+def test_infotaxis_posterior_equals_brute_force_tempered_bayes(beta, eps, delta):
     occ, wind, outlets = _map(1)
     prior = np.random.default_rng(2).random(occ.shape) + 0.1
     est = GridInfotaxis(occ, resolution=H, wind=wind, outlets=outlets, prior=prior, tempering=beta,
-                        false_hit_rate=eps, diffusivity=0.03, lifetime=8.0, encounter_scale=0.7)
+                        false_hit_rate=eps, missed_hit_rate=delta, diffusivity=0.03, lifetime=8.0,
+                        encounter_scale=0.7)
     g_all = _dense_green(est.model)
     pos, cells, hits, winds = _readings(occ, 25, 3)
     log_post = np.log(np.where(occ, 0.0, prior).ravel(), where=~occ.ravel(), out=np.full(occ.size, -np.inf))
     for p, (r, c), hit, w in zip(pos, cells, hits, winds):
         out = est.update(p, hit, w)
         mu = 0.7 * g_all[r * occ.shape[1] + c]  # κ G(x | s), all s
-        p_hit = eps + (1 - eps) * -np.expm1(-mu)  # P(hit | s)
-        p_miss = (1 - eps) * np.exp(-mu)  # P(miss | s), not 1 − P(hit | s): no cancellation
+        p_hit = eps + (1 - eps) * (1 - delta) * -np.expm1(-mu)  # P(hit | s)
+        p_miss = (1 - eps) * (delta + (1 - delta) * np.exp(-mu))  # P(miss | s), not 1 − P(hit | s): no cancellation
         with np.errstate(divide="ignore"):
             log_post = log_post + beta * np.log(p_hit if hit else p_miss)
         expect = np.exp(log_post - logsumexp(log_post)).reshape(occ.shape)
         np.testing.assert_allclose(out, expect, rtol=1e-9, atol=1e-15)
     assert est.n_observations == 25
     assert est.observations[0].wind == tuple(winds[0])
+
+
+def test_a_missed_hit_rate_bounds_what_one_miss_costs_and_enters_the_hit_probability():
+    """δ: a reading without a hit costs a source at most −log((1 − ε) δ) nats, where without δ a source beside the
+    sensor loses κG (checked on the cell itself); P(hit | s) of planning is ε + (1 − ε)(1 − δ)(1 − e^{−κG}); δ = 0
+    is the model without it bit for bit; a δ outside [0, 1) is refused by name."""
+    occ, wind, outlets = _map(1)
+    kw = dict(resolution=H, wind=wind, outlets=outlets, false_hit_rate=0.01, diffusivity=0.03, lifetime=8.0,
+              encounter_scale=40.0)
+    plain = GridInfotaxis(occ, **kw)
+    robust = GridInfotaxis(occ, missed_hit_rate=0.05, **kw)
+    same = GridInfotaxis(occ, missed_hit_rate=0.0, **kw)
+    free = np.argwhere(~occ)
+    x = (free[len(free) // 2][::-1] + 0.5) * H  # a free cell's centre
+    miss_plain, miss_robust = plain.log_likelihood(x, False), robust.log_likelihood(x, False)
+    assert miss_plain[~occ].min() < -20.0  # without δ one miss all but excludes the cells near the sensor
+    assert miss_robust[~occ].min() >= np.log(0.99 * 0.05) - 1e-12
+    np.testing.assert_array_equal(same.log_likelihood(x, False), miss_plain)
+    np.testing.assert_array_equal(same.log_likelihood(x, True), plain.log_likelihood(x, True))
+    g = _dense_green(robust.model)
+    r, c = robust.model.cell_of(x)
+    expect = 0.01 + 0.99 * 0.95 * -np.expm1(-40.0 * g[r * occ.shape[1] + c])
+    np.testing.assert_allclose(robust.hit_probability(np.array([x]))[0].ravel()[~occ.ravel()],
+                               expect[~occ.ravel()], rtol=1e-9)
+    for bad in (1.0, -0.1, float("nan")):
+        with pytest.raises(ValueError, match="missed_hit_rate"):
+            GridInfotaxis(occ, missed_hit_rate=bad, **kw)
+    for bad in ("0.1", True, 0.1j):
+        with pytest.raises(TypeError, match="missed_hit_rate"):
+            GridInfotaxis(occ, missed_hit_rate=bad, **kw)
 
 
 def test_infotaxis_is_order_invariant_and_likelihood_method_agrees():

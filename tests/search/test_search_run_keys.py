@@ -100,3 +100,31 @@ def test_off_ontology_is_part_of_the_key_and_reaches_the_robot(tmp_path, capsys)
     assert main(_args(world, plain, "--off-ontology", "0")) == 0
     (path,) = sorted((plain / "runs").glob("*.npz"))
     assert not any("off_ontology" in k for k in load_search_run(path).config["key"])
+
+
+def test_missed_hit_rate_is_part_of_the_key_and_bad_values_are_one_line(tmp_path, capsys):
+    """--missed-hit-rate δ: stored in the run's experiment config and its key; another δ in the same folder is
+    refused with both values; δ = 0 keys the runs as before the option existed; δ = 1 or not a number is one line
+    and exit 2."""
+    world, _ = write_full_world(tmp_path / "w", beliefs=False)
+    out = tmp_path / "out"
+    assert main(_args(world, out, "--missed-hit-rate", "0.01")) == 0
+    (path,) = sorted((out / "runs").glob("*.npz"))
+    run = load_search_run(path)
+    assert run.config["experiment"]["missed_hit_rate"] == 0.01
+    assert run.config["key"]["experiment.missed_hit_rate"] == 0.01
+    tree = _tree(out)
+    capsys.readouterr()
+    assert main(_args(world, out, "--missed-hit-rate", "0.02")) == 2
+    assert "experiment.missed_hit_rate: 0.01 → 0.02" in capsys.readouterr().err
+    assert _tree(out) == tree
+    plain = tmp_path / "plain"
+    assert main(_args(world, plain, "--missed-hit-rate", "0")) == 0
+    (path,) = sorted((plain / "runs").glob("*.npz"))
+    assert not any("missed_hit_rate" in k for k in load_search_run(path).config["key"])
+    for bad in ("1", "-0.1", "nan", "abc", "1e999"):
+        capsys.readouterr()
+        assert main(_args(world, tmp_path / "bad", "--missed-hit-rate", bad)) == 2, bad
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err == [f"psgsl search: error: --missed-hit-rate must be a number in [0, 1), got {bad!r}"]
+        assert not (tmp_path / "bad").exists()
