@@ -72,13 +72,19 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     if not 0 < args.delta < 1:
         raise SystemExit(f"--delta must lie in (0, 1), got {args.delta}")
+    if args.workers < 1:
+        raise SystemExit(f"--workers must be at least 1, got {args.workers}")
     new = args.folder / f"missed-hits-{args.delta:g}"
     new.mkdir(exist_ok=True)
     stored = {arm: sorted((args.folder / "runs").glob(f"*__{args.condition}__{arm.replace('/', '__')}__*.npz"))
               for arm in args.arms}
     jobs = [(p, new / p.name) for files in stored.values() for p in files]
-    with ProcessPoolExecutor(args.workers) as pool:
-        list(pool.map(rerun, *zip(*jobs), [args.delta] * len(jobs), [args.folder] * len(jobs)))
+    if args.workers == 1:  # in this process
+        for stored_run, out in jobs:
+            rerun(stored_run, out, args.delta, args.folder)
+    elif jobs:
+        with ProcessPoolExecutor(args.workers) as pool:
+            list(pool.map(rerun, *zip(*jobs), [args.delta] * len(jobs), [args.folder] * len(jobs)))
     budget = None
     print(f"| arm | runs | found, stored → δ = {args.delta:g} | RMST ratio δ / stored [95 % nested bootstrap] | "
           "RMST difference, s [95 % bootstrap], sign-flip p | source at HPD level ≥ 0.9999 | final coverage | "
