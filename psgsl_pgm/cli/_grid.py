@@ -91,8 +91,8 @@ def add_missed_hits_argument(parser) -> None:
     :func:`missed_hit_rate` when the command runs)."""
     parser.add_argument("--missed-hit-rate", default="0", metavar="DELTA",
                         help="the Infotaxis estimator's probability that a reading misses the plume whatever the "
-                        "model predicts, so that one reading without a hit costs a source at most -log(DELTA) nats "
-                        "(default: 0, the hit model without it)")
+                        "model predicts, so that one reading without a hit costs a source at most -log((1 - eps) "
+                        "DELTA) nats, eps the false-hit rate, 0.01 (default: 0, the hit model without it)")
 
 
 def add_ontology_argument(parser) -> None:

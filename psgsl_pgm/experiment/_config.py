@@ -63,9 +63,10 @@ class ExperimentConfig:
         ε of :class:`psgsl_pgm.olfaction.GridInfotaxis` (held fixed in the fit).
     missed_hit_rate : float
         δ in [0, 1) of :class:`psgsl_pgm.olfaction.GridInfotaxis`: the probability that a reading misses the plume
-        whatever the model predicts, so that one reading without a hit costs a candidate source at most −log δ
-        nats. 0 (the default): the hit model without it — on the calibration runs its maximum-likelihood value
-        (:func:`psgsl_pgm.olfaction.fit_plume_parameters` with ``fit_missed_hits=True``) is 0.
+        whatever the model predicts, so that one reading without a hit costs a candidate source at most
+        −log((1 − ε)δ) nats. 0 (the default): the hit model without it — on the calibration runs its
+        maximum-likelihood value (:func:`psgsl_pgm.olfaction.fit_plume_parameters` with ``fit_missed_hits=True``)
+        is 0.
     parameter_grid : tuple of (D, τ, κ, weight), or None
         The plume parameters :class:`psgsl_pgm.olfaction.GridInfotaxis` marginalises over, with their population
         weights fitted on the calibration runs (:func:`calibrate`: the marginal maximum-likelihood mixing
