@@ -8,13 +8,23 @@ per source × policy/variant: runs found with the Wilson interval, RMST with its
 Kaplan–Meier median, the final error, the coverage of the 90 % region at ¼, ½, ¾ and the end with its mean
 area, and the median HPD level of the true source; then every paired RMST difference with its bootstrap
 interval, sign-flip p-value and Holm-adjusted p-value. Groups with fewer than ``--min-runs`` runs are left out.
+
+Then, from the stored runs (``OUT/runs/*.npz``), the closed loop's final credible region against the fixed tour's
+at the same elapsed time on the same seed: a closed-loop run ends when it finds the source, so its "final"
+posterior holds fewer readings than the tour's final one. For each closed-loop run whose seed has a tour run (same
+variant; ``psgsl search`` runs the tour with olfaction alone unless asked for more) still
+searching at the closed-loop run's last stop (time t), the tour's region is the one after its last stop at or
+before t. Mean area and coverage of both over those pairs.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from collections import defaultdict
 from pathlib import Path
+
+import numpy as np
 
 SOURCES = {"oven": "oven (kitchen)", "bed": "bed (bedroom, off-ontology)", "5_6": "floor point (5.0, 6.0), hallway"}
 
@@ -33,6 +43,62 @@ def _row(source, key, s):
             f"{s['final_error']['mean']:.2f} | {cov['quarter']:.2f} / {cov['half']:.2f} / "
             f"{cov['three_quarters']:.2f} / **{cov['final']:.2f}** | {s['region_area90']['mean']:.1f} | "
             f"{s['hpd_level']['median']:.2f} |")
+
+
+def matched_tour(runs_dir, estimator: str, *, min_pairs: int = 1) -> dict:
+    """Closed-loop final regions against the tour's at the same elapsed time, paired on seeds.
+
+    Parameters
+    ----------
+    runs_dir : path
+        The ``runs`` folder of a ``psgsl search`` output.
+    estimator : str
+        Only runs of this estimator.
+    min_pairs : int
+        Groups with fewer pairs are left out.
+
+    Returns
+    -------
+    dict
+        ``{(source, "policy/variant"): {"n", "time_median", "area", "coverage", "tour_area", "tour_coverage"}}``:
+        over the pairs, the median time t of the closed-loop run's last stop, the mean area (m²) and coverage of
+        its 90 % region there, and the same for the tour run of the same source, variant and seed after its last
+        stop at or before t. A pair needs the tour still searching at t (not found by t); others are left out.
+    """
+    groups = defaultdict(dict)
+    for path in sorted(Path(runs_dir).glob("*.npz")):
+        with np.load(path) as z:
+            if str(z["estimator"]) != estimator:
+                continue
+            source = path.name.split("__", 1)[0]
+            run = {k: z[k] for k in ("time", "region_area", "region_hit")}
+            run["found"], run["time_to_find"] = bool(z["found"]), float(z["time_to_find"])
+            groups[(source, str(z["policy"]), str(z["variant"]))][int(z["seed"])] = run
+    out = {}
+    order = list(SOURCES)
+    for (source, policy, variant), by_seed in sorted(groups.items(), key=lambda kv: (
+            order.index(kv[0][0]) if kv[0][0] in order else len(order), kv[0])):
+        if policy == "tour":
+            continue
+        tours = groups.get((source, "tour", variant), {})
+        pairs = []
+        for seed, run in by_seed.items():
+            tour = tours.get(seed)
+            t = float(run["time"][-1])
+            if tour is None or (tour["found"] and tour["time_to_find"] <= t):
+                continue  # no tour run on this seed, or the tour had stopped searching by t
+            i = int(np.searchsorted(tour["time"], t, side="right")) - 1  # its last stop at or before t
+            pairs.append((t, run["region_area"][-1], run["region_hit"][-1],
+                          tour["region_area"][i], tour["region_hit"][i]))
+        if len(pairs) < min_pairs:
+            continue
+        t, area, hit, tour_area, tour_hit = np.array(pairs, dtype=float).T
+        out[(source, f"{policy}/{variant}")] = {
+            "n": len(pairs), "time_median": float(np.median(t)), "area": float(area.mean()),
+            "coverage": float(hit.mean()), "tour_area": float(tour_area.mean()),
+            "tour_coverage": float(tour_hit.mean()),
+        }
+    return out
 
 
 def main(argv=None) -> int:
@@ -73,6 +139,19 @@ def main(argv=None) -> int:
                 tag = " — **primary**" if v.get("primary") else ""
                 print(f"  * {k}: {d['value']:+.0f} s [{d['ci95'][0]:+.0f}, {d['ci95'][1]:+.0f}], "
                       f"p = {v['p_value']:.4f}, p_Holm = {v['p_holm']:.4f} (n = {v['n']}){tag}")
+        matched = matched_tour(args.out / "runs", est, min_pairs=args.min_runs)
+        if matched:
+            print("\nThe 90 % region at the closed-loop run's end and the tour's at the same elapsed time, same seeds "
+                  "(pairs with the tour still searching then):\n")
+            print("| source | policy / variant | pairs | elapsed time, median s | region m² / coverage, closed loop "
+                  "| region m² / coverage, tour at that time |")
+            print("|---|---|---|---|---|---|")
+            last = None
+            for (label, key), m in matched.items():
+                name = SOURCES.get(label, label) if label != last else ""
+                last = label
+                print(f"| {name} | {key} | {m['n']} | {m['time_median']:.0f} | {m['area']:.1f} / {m['coverage']:.2f} "
+                      f"| {m['tour_area']:.1f} / {m['tour_coverage']:.2f} |")
     return 0
 
 
