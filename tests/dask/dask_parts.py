@@ -59,7 +59,7 @@ class RealCluster:
                 proc.terminate()
         for proc in [*self.workers, self.scheduler]:
             try:
-                proc.wait(timeout=20)
+                proc.wait(timeout=5)  # they end in under 0.5 s; one that has not by then is killed
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
