@@ -72,15 +72,17 @@ def compare(folders: dict) -> list:
             raise ValueError(f"olfaction differs between the detector models in run {key}")
         groups[key[:2]].append((a, b))
     rows = []
+    grids = {"final_error": [1.0], "mean_error": np.linspace(0.0, 1.0, 101)}
     for (source, estimator), pairs in sorted(groups.items()):
+        # (runs, 3): the error at the end and averaged over the search, per model, every variant at once
+        errors = {name: [aligned([p[m] for p in pairs], "error", grid).mean(axis=1) for m in (0, 1)]
+                  for name, grid in grids.items()}
         for v, variant in enumerate(VARIANTS):
             if variant == "olfaction":
                 continue
             row = {"source": source, "estimator": estimator, "variant": variant, "n": len(pairs)}
-            for name, grid in (("final_error", [1.0]), ("mean_error", np.linspace(0.0, 1.0, 101))):
-                per_model = [aligned([p[m] for p in pairs], "error", grid)[:, :, v].mean(axis=1) for m in (0, 1)]
-                row[name] = (float(per_model[0].mean()), float(per_model[1].mean()),
-                             paired_t(per_model[1] - per_model[0]))
+            for name, (est, sim) in errors.items():
+                row[name] = (float(est[:, v].mean()), float(sim[:, v].mean()), paired_t(sim[:, v] - est[:, v]))
             for m, model in enumerate(MODELS):
                 final = [p[m] for p in pairs]
                 row[model] = (float(np.mean([r.region_hit[-1, v] for r in final])),

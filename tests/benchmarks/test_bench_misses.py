@@ -1,19 +1,13 @@
 """benchmarks/bench_misses.py reads each miss in the house of its own seed (the embedded house's furniture
 varies with the seed) and reports the belief's mass that no stop can find."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from ._scripts import ROOT, load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("bench_misses", ROOT / "benchmarks" / "bench_misses.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("bench_misses")
 
 
 def test_a_miss_is_classified_in_the_house_of_its_seed(tmp_path, capsys):

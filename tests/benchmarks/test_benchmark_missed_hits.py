@@ -1,21 +1,14 @@
 """benchmarks/benchmark_missed_hits.py re-runs stored benchmark runs with a missed-hit rate, pairs them with the
 stored ones on the same episodes, and resumes."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from ._scripts import load_script
 
 
 def _script():
-    path = ROOT / "benchmarks" / "benchmark_missed_hits.py"
-    spec = importlib.util.spec_from_file_location("benchmark_missed_hits", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmark_missed_hits")
 
 
 @pytest.mark.slow

@@ -1,21 +1,16 @@
 """benchmarks/calibration_missed_hits.py fits (κ, δ) on tours of reference homes: the joint fit is never worse
 than δ = 0, under either wind estimate."""
 
-import importlib.util
 import re
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from ._scripts import load_script
 
 
 @pytest.mark.slow
 def test_the_joint_fit_is_at_least_the_fit_without_missed_hits(capsys):
-    path = ROOT / "benchmarks" / "calibration_missed_hits.py"
-    spec = importlib.util.spec_from_file_location("calibration_missed_hits", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_script("calibration_missed_hits")
     module.main(["--homes", "1"])
     out = capsys.readouterr().out
     assert len(re.findall(r"^home 1000000, \w+: \d+ readings, \d+ hits$", out, re.M)) == 2

@@ -1,20 +1,14 @@
 """benchmarks/closed_loop_report.py pairs each closed-loop run's final credible region with the fixed tour's at the
 same elapsed time, on the same seed, only while the tour is still searching."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from ._scripts import load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("closed_loop_report", ROOT / "benchmarks" / "closed_loop_report.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("closed_loop_report")
 
 
 def _run(runs, policy, seed, time, area, hit, *, found=True, estimator="pmfs", variant="olfaction"):

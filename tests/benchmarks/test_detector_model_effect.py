@@ -1,23 +1,17 @@
 """benchmarks/detector_model_effect.py pairs the two detector models' runs by seed and refuses an olfaction variant
 that differs between them (it does not read the camera)."""
 
-import importlib.util
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from scipy import stats
 
-ROOT = Path(__file__).resolve().parents[2]
+from ._scripts import load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("detector_model_effect",
-                                                  ROOT / "benchmarks" / "detector_model_effect.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("detector_model_effect")
 
 
 def _run(seed, final_semantics, *, olfaction=1.0, hit=True, area=2.0, level=0.5):
