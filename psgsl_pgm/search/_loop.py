@@ -16,7 +16,10 @@ Under the hypothesis s = c the robot at x finds the source iff x lies within r =
 region R(c): the footprint of the object that owns c in the robot's map (an oven: a robot cannot drive into
 it, and its nearest drivable cell is 0.55 m from its centre), or c's own centre otherwise (a disc of radius r).
 The success rule is that rule with the true source as hypothesis (the emitting object, or the cell holding a
-point source). A move along path points x_1 … x_p (the drive and the stop) that does not find the source is an
+point source), applied where the robot truly is: with a localisation error
+(:class:`psgsl_pgm.sim.LocalisationError`) the robot plans, drives and records in the frame it believes, and only
+the rule maps its path to the true one (:meth:`psgsl_pgm.sim.World.true_positions`, at the time it passes each
+point). A move along path points x_1 … x_p (the drive and the stop) that does not find the source is an
 observation F̄ with
 
 .. math:: P(\bar F \mid s = c) = \begin{cases} m & \exists k:\ d(x_k, R(c)) \le r \\
@@ -299,6 +302,10 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
         return detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), truth_hypothesis)
 
+    def found_on(seg) -> np.ndarray:  # the success rule where the robot truly is as it passes seg's points
+        arcs = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(seg, axis=0), axis=1))])
+        return near(world.true_positions(seg, times=world.time + arcs / config.speed))
+
     # geodesic distance from the start to where the source counts as found
     d_start = space.distances(start_cell)
     reachable = space.nav.ravel() & near(space.centres)
@@ -363,7 +370,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         if recorder is not None:
             recorder.choose((stop[0], stop[1], headings[0]))
         # found on the way?
-        hits_on_path = near(seg)
+        hits_on_path = found_on(seg)
         if hits_on_path.any() and (misses is None or misses.random() >= search.miss_probability):
             k = int(np.argmax(hits_on_path))
             arc = float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0

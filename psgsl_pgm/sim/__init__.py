@@ -9,7 +9,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
 * gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensor and anemometer models;
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
-* :func:`make_world` — all of it on one clock for the experiment;
+* :func:`make_world` — all of it on one clock for the experiment, optionally with the robot's localisation
+  error (:class:`LocalisationError`);
 * :func:`generate_house` — generated homes (3–8 typed rooms, doors, windows, furniture per room type, wind),
   each a world that can be written as a world file, with their ontology :func:`generated_ontology`;
 * :func:`load_world` — a user's house from a world file (map, rooms, objects, ontology, wind, sources); the
@@ -33,6 +34,7 @@ from ._generated_ontology import GENERATOR_REFERENCE_SEEDS, generated_ontology
 from ._house import House, default_house, segment_mask
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
 from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
+from ._pose import LocalisationError
 from ._roommap import load_room_map, save_room_map
 from ._rosmap import load_ros_map, save_ros_map
 from ._semantic_map import SemanticMap
@@ -59,6 +61,7 @@ __all__ = [
     "HOUSE_ROOMS",
     "House",
     "LineOfSightCache",
+    "LocalisationError",
     "NOTHING",
     "OTHER",
     "ROOM_RANGE",

@@ -6,6 +6,18 @@ the robot-side code only asks for readings at poses:
     world = make_world(seed=0)                 # default house, smoke from the oven, 60 s warm-up
     r = world.sense_gas((3.0, 6.0))            # advances the clock by one sensor window
     frame = world.camera_frame((3.0, 6.0, 0.0))
+
+**Localisation error** (``make_world(localisation=LocalisationError(...))``, :mod:`psgsl_pgm.sim._pose`; default
+none). The robot plans and believes in its estimated frame: every pose it passes to the world is the pose it
+believes, and when it stands at a believed pose p it truly stands at p − e(t), e(t) being the localisation
+offset at that moment (a robot that holds its believed pose while the estimate moves). The robot senses at its
+stops, not while driving, as the search loop and the fixed tour do: the gas sensor (one position per window, at
+the window's start), the anemometer (whose reading, in the robot's frame, turns by the heading error e_θ when
+the robot reports it in its map frame) and the camera (the cells it sees from its true pose, placed in the map
+where its believed pose puts them) all observe from the true pose, and return what the robot reports. A true
+position that would lie in a wall is pulled back along the offset to the last free point before the wall (the
+robot cannot be inside a wall). Only the success rule and the metrics map believed positions to true ones
+(:meth:`World.true_positions`); the robot-side code never does.
 """
 
 from __future__ import annotations
@@ -18,6 +30,7 @@ from ._classes import reindex
 from ._detector import DetectorModel
 from ._filaments import FilamentModel, FilamentParams
 from ._house import House, default_house
+from ._pose import LocalisationError
 from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind
@@ -43,11 +56,13 @@ class World:
         The object that emits: the one named by class, or the object whose footprint holds the source position
         (None for a source in open space). The success rule of the closed loop counts its footprint
         (:meth:`SceneObject.mask`), not only its centre.
+    localisation : LocalisationError or None
+        The robot's localisation error (None: the robot is exactly where it believes; see the module docstring).
     """
 
     def __init__(self, house: House, wind: WindSequence, gas: FilamentModel, *, camera: Camera,
                  detector: DetectorModel, gas_sensor: GasSensor, anemometer: Anemometer, source_object=None,
-                 seed: int = 0):
+                 seed: int = 0, localisation: LocalisationError | None = None):
         self.house = house
         self.wind = wind
         self.gas = gas
@@ -60,6 +75,12 @@ class World:
         r1, r2, r3 = (np.random.default_rng(s) for s in ss.spawn(3))
         self._rng_gas_sensor, self._rng_anemometer, self._rng_camera = r1, r2, r3
         self._sensor_state = 0.0
+        if localisation is not None and not isinstance(localisation, LocalisationError):
+            raise TypeError(f"localisation must be a LocalisationError or None, got {type(localisation).__name__}")
+        self.localisation = localisation
+        # the localisation offset's own stream: the seed sequence's fourth child, so the three above draw as before
+        self._rng_pose = np.random.default_rng(ss.spawn(1)[0])
+        self._offsets = np.zeros((0, 3))  # e at t = k dt for k < len, drawn on demand in step order
 
     @property
     def source(self) -> np.ndarray:
@@ -86,13 +107,85 @@ class World:
         """True concentration (ppm) at points (..., 2) now, without sensor effects."""
         return self.gas.concentration(xy)
 
+    def _offset_at(self, times) -> np.ndarray:
+        """(..., 3) localisation offset e at ``times`` (s, world clock; the nearest step of ``dt``)."""
+        k = np.maximum(np.rint(np.asarray(times, dtype=np.float64) / self.dt), 0).astype(np.int64)
+        need = int(k.max(initial=0)) + 1
+        have = len(self._offsets)
+        if need > have:  # the same offsets whatever the order of the queries: drawn step after step
+            err = self.localisation
+            first = err.stationary(rng=self._rng_pose)[None, :] if have == 0 else np.zeros((0, 3))
+            state = first[0] if have == 0 else self._offsets[-1]
+            more = max(need - have - len(first), 1024)  # in blocks: fewer, longer draws of the same stream
+            ahead = err.advance(state, more, self.dt, rng=self._rng_pose)
+            self._offsets = np.concatenate([self._offsets, first, ahead])
+        return self._offsets[k]
+
+    def _pull_back(self, believed: np.ndarray, true: np.ndarray) -> np.ndarray:
+        """``true`` (n, 2) with each point inside a wall (or off the map) moved back along the offset to the
+        last free point (quarter-cell steps) between it and its ``believed`` point (n, 2); a believed point
+        that is itself in a wall leaves its true point as it is."""
+        g = self.house.grid
+
+        def blocked(p):
+            rc = g.world_to_cell(p)
+            inside = g.contains(rc)
+            out = ~inside
+            out[inside] = g.occupancy[rc[inside][:, 0], rc[inside][:, 1]]
+            return out
+
+        bad = np.flatnonzero(blocked(true))
+        if bad.size == 0:
+            return true
+        b, t = believed[bad], true[bad]
+        m = int(np.ceil(np.linalg.norm(t - b, axis=-1).max() / (g.resolution / 4))) + 1
+        f = np.linspace(0.0, 1.0, m + 1)
+        pts = b[:, None, :] + f[None, :, None] * (t - b)[:, None, :]  # (q, m + 1, 2) from believed to true
+        first = np.argmax(blocked(pts), axis=1)  # the first blocked point (the last one is)
+        ok = first > 0
+        out = true.copy()
+        out[bad[ok]] = pts[np.flatnonzero(ok), first[ok] - 1]
+        return out
+
+    def true_positions(self, points, *, times=None) -> np.ndarray:
+        """The true positions (..., 2) of the believed positions ``points`` (..., 2), m — for the success rule
+        and the metrics only, never for the robot.
+
+        Parameters
+        ----------
+        points : (..., 2) array_like
+            Positions the robot believes it is at, metres (map frame).
+        times : float or (...) array_like, optional, keyword-only
+            World-clock times (s) at which it is there (default: now); broadcast against ``points[..., 0]``.
+
+        Returns
+        -------
+        (..., 2) ndarray
+            ``points`` − e(times), pulled out of walls (see the module docstring); a copy of ``points``
+            without localisation error.
+        """
+        p = np.asarray(points, dtype=np.float64)
+        if p.ndim == 0 or p.shape[-1] != 2 or not np.isfinite(p).all():
+            raise ValueError(f"points must be finite positions of shape (..., 2), got shape {p.shape}")
+        if self.localisation is None:
+            return p.copy()
+        t = np.broadcast_to(np.asarray(self.time if times is None else times, dtype=np.float64), p.shape[:-1])
+        if not np.isfinite(t).all():
+            raise ValueError("times must be finite seconds of the world clock")
+        flat = p.reshape(-1, 2)
+        e = self._offset_at(t.reshape(-1))
+        return self._pull_back(flat, flat - e[:, :2]).reshape(p.shape)
+
     def sense_gas(self, xy, *, duration: float | None = None) -> GasReading:
         """Hold the gas sensor at ``xy`` for one window (or ``duration`` s) while the world advances.
 
         The sensor samples the concentration after every time step; its first-order lag continues from the
-        previous reading wherever that was taken.
+        previous reading wherever that was taken. With a localisation error, ``xy`` is where the robot
+        believes it is, and the sensor samples at its true position when the window starts.
         """
         xy = np.asarray(xy, dtype=np.float64)
+        if self.localisation is not None:
+            xy = self.true_positions(xy)
         dt = self.dt
         n = self.gas_sensor.samples(dt) if duration is None else max(1, int(round(duration / dt)))
         samples = self.gas.sample(xy, n)  # the clock: one step per sample
@@ -101,13 +194,45 @@ class World:
         return reading
 
     def sense_wind(self, xy) -> np.ndarray:
-        """(2,) anemometer reading at ``xy`` now (the snapshot in force, plus noise)."""
-        return self.anemometer.read(self.wind_now().at(xy), rng=self._rng_anemometer)
+        """(2,) anemometer reading at ``xy`` now (the snapshot in force, plus noise).
+
+        With a localisation error, the wind at the true position, turned by the heading error e_θ (the reading
+        in the robot's frame, reported in its map frame with the heading it believes).
+        """
+        if self.localisation is None:
+            return self.anemometer.read(self.wind_now().at(xy), rng=self._rng_anemometer)
+        xy = np.asarray(xy, dtype=np.float64)
+        e = self._offset_at(self.time)
+        u, v = self.wind_now().at(self._pull_back(xy.reshape(1, 2), xy.reshape(1, 2) - e[:2]))[0]
+        c, s = np.cos(e[2]), np.sin(e[2])
+        return self.anemometer.read(np.array([c * u - s * v, s * u + c * v]), rng=self._rng_anemometer)
 
     def camera_frame(self, pose, *, model: DetectorModel | None = None, layer_edges=None) -> Frame:
-        """One camera frame from ``pose`` = (x, y, heading); see :func:`take_frame`."""
-        return take_frame(self.house, pose, camera=self.camera, detector=self.detector, rng=self._rng_camera,
-                          model=model, layer_edges=layer_edges)
+        """One camera frame from ``pose`` = (x, y, heading); see :func:`take_frame`.
+
+        With a localisation error, ``pose`` is the pose the robot believes: the frame is taken from the true
+        pose, and each observed cell is placed where the robot's believed pose puts it, q' = p + R(e_θ)(q − p_t)
+        (p the believed and p_t the true position, q the cell's centre); cells placed off the map are dropped.
+        The frame's ``pose`` is the believed one and its distances are the measured (true) ones.
+        """
+        if self.localisation is None:
+            return take_frame(self.house, pose, camera=self.camera, detector=self.detector, rng=self._rng_camera,
+                              model=model, layer_edges=layer_edges)
+        pose = np.asarray(pose, dtype=np.float64)
+        if pose.shape != (3,) or not np.isfinite(pose).all():
+            raise ValueError(f"pose must be a finite (x, y, heading) of shape (3,), got shape {pose.shape}")
+        e = self._offset_at(self.time)
+        p = pose[:2]
+        p_true = self._pull_back(p[None], p[None] - e[None, :2])[0]
+        frame = take_frame(self.house, (p_true[0], p_true[1], pose[2] - e[2]), camera=self.camera,
+                           detector=self.detector, rng=self._rng_camera, model=model, layer_edges=layer_edges)
+        g = self.house.grid
+        c, s = np.cos(e[2]), np.sin(e[2])
+        d = g.cell_to_world(frame.cells) - p_true
+        cells = g.world_to_cell(p + np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=-1))
+        keep = g.contains(cells)
+        return Frame(pose.copy(), cells[keep], None if frame.layers is None else frame.layers[keep],
+                     frame.distance[keep], frame.labels[keep], frame.likelihood[keep], frame.classes)
 
     def semantic_map(self, class_prior, *, room_table=None, room_names=None, layers: int | None = None) -> SemanticMap:
         """Initial class beliefs over the house in the detector's class order.
@@ -186,7 +311,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                perturbation: float = 0.3, params: FilamentParams | None = None, warm_up: float = 60.0,
                duration: float = 600.0, camera: Camera | None = None, detector: DetectorModel | None = None,
                gas_sensor: GasSensor | None = None, anemometer: Anemometer | None = None,
-               wind: WindSequence | None = None) -> World:
+               wind: WindSequence | None = None, localisation: LocalisationError | None = None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
 
     Parameters
@@ -211,6 +336,10 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
     wind : WindSequence, optional, keyword-only
         Given wind snapshots (e.g. a GADEN CFD export) instead of :func:`make_wind` between the house's windows
         (``mean_speed`` and ``perturbation`` are then unused); on the house's grid.
+    localisation : LocalisationError, optional, keyword-only
+        The robot's localisation error (default None: it is exactly where it believes, and the world draws
+        nothing for it). Its offset has its own random stream, so the other streams draw the same numbers
+        with and without it.
 
     Returns
     -------
@@ -226,6 +355,8 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         house = default_house(seed)
     if not isinstance(house, House):
         raise TypeError(f"house must be a House, got {type(house).__name__}")
+    if localisation is not None and not isinstance(localisation, LocalisationError):
+        raise TypeError(f"localisation must be a LocalisationError or None, got {type(localisation).__name__}")
     if not (np.isfinite(warm_up) and warm_up >= 0):
         raise ValueError(f"warm_up must be a non-negative number of seconds, got {warm_up!r}")
     ss = np.random.SeedSequence(int(seed))
@@ -245,6 +376,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         anemometer=anemometer if anemometer is not None else Anemometer(),
         source_object=source_object,
         seed=seed,
+        localisation=localisation,
     )
     world.advance(warm_up)
     return world
