@@ -15,8 +15,8 @@ stops, not while driving, as the search loop and the fixed tour do: the gas sens
 the window's start), the anemometer (whose reading, in the robot's frame, turns by the heading error e_θ when
 the robot reports it in its map frame) and the camera (the cells it sees from its true pose, placed in the map
 where its believed pose puts them) all observe from the true pose, and return what the robot reports. A true
-position that would lie in a wall is pulled back along the offset to the last free point before the wall (the
-robot cannot be inside a wall). Only the success rule and the metrics map believed positions to true ones
+position beyond or inside a wall is pulled back along the offset to the last free point before the wall (the
+robot cannot be inside or behind a wall it believes it is in front of). Only the success rule and the metrics map believed positions to true ones
 (:meth:`World.true_positions`); the robot-side code never does.
 """
 
@@ -122,9 +122,9 @@ class World:
         return self._offsets[k]
 
     def _pull_back(self, believed: np.ndarray, true: np.ndarray) -> np.ndarray:
-        """``true`` (n, 2) with each point inside a wall (or off the map) moved back along the offset to the
-        last free point (quarter-cell steps) between it and its ``believed`` point (n, 2); a believed point
-        that is itself in a wall leaves its true point as it is."""
+        """``true`` (n, 2) with each point whose segment from its ``believed`` point (n, 2) crosses a wall (or
+        leaves the map) moved back to the last free point of that segment before the wall (quarter-cell
+        steps); a believed point that is itself in a wall leaves its true point as it is."""
         g = self.house.grid
 
         def blocked(p):
@@ -134,17 +134,16 @@ class World:
             out[inside] = g.occupancy[rc[inside][:, 0], rc[inside][:, 1]]
             return out
 
-        bad = np.flatnonzero(blocked(true))
-        if bad.size == 0:
-            return true
-        b, t = believed[bad], true[bad]
-        m = int(np.ceil(np.linalg.norm(t - b, axis=-1).max() / (g.resolution / 4))) + 1
+        m = int(np.ceil(np.linalg.norm(true - believed, axis=-1).max(initial=0.0) / (g.resolution / 4))) + 1
         f = np.linspace(0.0, 1.0, m + 1)
-        pts = b[:, None, :] + f[None, :, None] * (t - b)[:, None, :]  # (q, m + 1, 2) from believed to true
-        first = np.argmax(blocked(pts), axis=1)  # the first blocked point (the last one is)
-        ok = first > 0
+        pts = believed[:, None, :] + f[None, :, None] * (true - believed)[:, None, :]  # (n, m + 1, 2)
+        pts[:, -1] = true
+        stop = blocked(pts)
+        cut = np.flatnonzero(stop.any(axis=1) & ~stop[:, 0])
+        if cut.size == 0:
+            return true
         out = true.copy()
-        out[bad[ok]] = pts[np.flatnonzero(ok), first[ok] - 1]
+        out[cut] = pts[cut, np.argmax(stop[cut], axis=1) - 1]
         return out
 
     def true_positions(self, points, *, times=None) -> np.ndarray:
