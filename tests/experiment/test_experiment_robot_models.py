@@ -10,7 +10,7 @@ from psgsl_pgm.experiment._config import PARAMETER_GRID
 from psgsl_pgm.experiment._robot_models import robot_detector_model, wind_basis
 from psgsl_pgm.experiment._run import walk
 from psgsl_pgm.experiment._tour import exploration_tour
-from psgsl_pgm.sim import HOUSE_CLASSES, DetectorModel, make_world
+from psgsl_pgm.sim import HOUSE_CLASSES, DetectorModel, LocalisationError, make_world
 
 
 class _SimulatorOnlyWind:
@@ -24,6 +24,29 @@ class _SimulatorOnlyWind:
         if not caller.startswith("psgsl_pgm.sim"):
             raise RuntimeError(f"{caller} read the simulator's wind field (.{name})")
         return getattr(object.__getattribute__(self, "_wind"), name)
+
+
+def guard_true_pose(world, allow=None):
+    """``world`` with its true pose, its localisation offset and the error's parameters readable only from the
+    simulator's own modules (psgsl_pgm.sim.*), or from the frames ``allow(frame)`` accepts."""
+    cls = type(world)
+
+    def check(name):
+        frame = sys._getframe(2)  # the code that reads the attribute
+        caller = frame.f_globals.get("__name__", "")
+        if not (caller.startswith("psgsl_pgm.sim") or (allow is not None and allow(frame))):
+            raise RuntimeError(f"{caller} read the robot's true pose (.{name})")
+
+    ns = {}
+    for name in ("true_positions", "_offset_at", "_pull_back"):
+        ns[name] = property(lambda self, n=name, fn=getattr(cls, name): (check(n), fn.__get__(self))[1])
+    for name in ("localisation", "_offsets", "_rng_pose"):
+        key = "_guarded_" + name
+        world.__dict__[key] = world.__dict__.pop(name)
+        ns[name] = property(lambda self, n=name, k=key: (check(n), self.__dict__[k])[1],
+                            lambda self, v, k=key: self.__dict__.__setitem__(k, v))
+    world.__class__ = type(f"TruePoseGuarded{cls.__name__}", (cls,), ns)
+    return world
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +73,36 @@ def test_no_estimator_code_path_reads_the_simulated_wind(guarded_world, estimato
     assert beliefs.wind.n_readings == 12
     # re-solved at readings 1, 2, 4, 8 at most (and once for the still-air start)
     assert 2 <= beliefs.n_wind_solves <= 5
+
+
+@pytest.fixture(scope="module")
+def pose_guarded_world():
+    """A robot with a localisation error whose true pose, offset and error parameters only the simulator reads."""
+    world = make_world(seed=3, source="oven", warm_up=20.0, localisation=LocalisationError())
+    world.wind = _SimulatorOnlyWind(world.wind)
+    return guard_true_pose(world)
+
+
+def test_the_guard_catches_a_read_of_the_true_pose(pose_guarded_world):
+    for read in (lambda w: w.true_positions((3.0, 6.0)), lambda w: w._offset_at(0.0), lambda w: w._offsets,
+                 lambda w: w.localisation.sigma, lambda w: w._rng_pose):
+        with pytest.raises(RuntimeError, match="read the robot's true pose"):
+            read(pose_guarded_world)
+
+
+@pytest.mark.parametrize("estimator", ["infotaxis", "pmfs"])
+def test_no_robot_code_path_reads_the_true_pose(pose_guarded_world, estimator):
+    """The readings, frames and beliefs of a tour with a localisation error: the world applies the offset, the
+    robot's code sees believed poses only."""
+    config = ExperimentConfig(stops=8)
+    beliefs = VariantPosteriors(pose_guarded_world, estimator, config)
+    tour = exploration_tour(pose_guarded_world.house).first(8)
+    for _, stop, reading, wind, frames in walk(pose_guarded_world, tour, config):
+        beliefs.observe(stop, reading, wind, frames)
+        beliefs.posteriors()
+        beliefs.estimator.information_gain([stop])
+        assert all(np.array_equal(f.pose[:2], stop) for f in frames)  # the frames carry the believed pose
+    assert beliefs.wind.n_readings == 8
 
 
 def test_wind_estimate_finds_the_through_flow_of_a_house():
