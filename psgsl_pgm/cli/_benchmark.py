@@ -11,9 +11,11 @@ from ._grid import (
     add_found_arguments,
     add_scheduler_argument,
     add_workers_argument,
+    add_world_model_argument,
     interrupted,
     positive_float,
     seed_count,
+    world_model,
 )
 
 __all__ = ["add_parser", "run"]
@@ -71,6 +73,7 @@ def add_parser(subparsers):
     add_found_arguments(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
+    add_world_model_argument(p)
     p.add_argument("--out", default="psgsl-benchmark", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
@@ -96,6 +99,9 @@ def _run(args) -> int:
         raise ValueError("--rooms, --area and --room-types shape generated homes; they do not apply with --world")
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", args.clearance)) if v is not None}
     search = SearchConfig(time_budget=args.budget, **geometry)
+    from ..experiment import ExperimentConfig
+
+    config = ExperimentConfig(world_model=world_model(args.world_model))
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
     what = args.world if args.world is not None else f"{args.houses} generated homes"
     print(f"psgsl benchmark: {what}, {args.seeds} seeds, policies {' '.join(args.policies)}, variants "
@@ -106,7 +112,7 @@ def _run(args) -> int:
                                 policies=args.policies, variants=args.variants, conditions=args.conditions,
                                 off_rate=args.off_rate, gases=args.gases, first_house=args.first_house,
                                 house_options=options, workers=args.workers, scheduler=args.scheduler,
-                                search=search, progress=not args.quiet, figures=not args.no_figures,
+                                config=config, search=search, progress=not args.quiet, figures=not args.no_figures,
                                 command=command)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")

@@ -15,11 +15,13 @@ from ._grid import (
     add_scheduler_argument,
     add_workers_argument,
     add_world_arguments,
+    add_world_model_argument,
     interrupted,
     positive_float,
     positive_int,
     seed_count,
     seed_range,
+    world_model,
     world_sources,
 )
 
@@ -54,6 +56,7 @@ def add_parser(subparsers):
     add_found_arguments(p)
     add_ontology_argument(p)
     add_missed_hits_argument(p)
+    add_world_model_argument(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
@@ -136,7 +139,7 @@ def _run(args) -> int:
     spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(off_ontology=args.off_ontology, missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
-                              **gas)
+                              world_model=world_model(args.world_model), **gas)
     clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}
     from ..search import check_findable

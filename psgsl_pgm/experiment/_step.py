@@ -67,7 +67,7 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
     spec = parse_source(source)
     setting = default_world() if world_spec is None else world_spec
     if world is None:
-        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
+        world = setting.make_world(int(seed), spec, warm_up=config.warm_up, model=config.world_model)
     return config, spec, setting, world
 
 

@@ -10,6 +10,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment;
+* :class:`WorldModel` — the ``ideal`` world (built from the robot's own assumptions) or the ``realistic`` one (CFD
+  wind, a MOX sensor, an occluding camera with persistent errors, localisation error), one component at a time;
 * :func:`generate_house` — generated homes (3–8 typed rooms, doors, windows, furniture per room type, wind),
   each a world that can be written as a world file, with their ontology :func:`generated_ontology`;
 * :func:`load_world` — a user's house from a world file (map, rooms, objects, ontology, wind, sources); the
@@ -39,6 +41,7 @@ from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
+from ._world_model import WORLD_COMPONENTS, WORLD_MODELS, WorldModel
 from ._worldfile import WorldSpec, default_world, load_world, navigable
 
 __all__ = [
@@ -66,7 +69,10 @@ __all__ = [
     "SemanticMap",
     "WindField",
     "WindSequence",
+    "WORLD_COMPONENTS",
+    "WORLD_MODELS",
     "World",
+    "WorldModel",
     "WorldSpec",
     "box_footprint",
     "cells_clear",
