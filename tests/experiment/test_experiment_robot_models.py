@@ -207,3 +207,17 @@ def test_infotaxis_gets_the_parameter_grid_and_the_plume_solves_follow_the_wind(
         ExperimentConfig(parameter_grid=((0.01, 100.0, 0.5),))
     with pytest.raises(ValueError, match="non-negative weights"):
         ExperimentConfig(parameter_grid=((0.01, 100.0, 0.5, -1.0),))
+
+
+def test_the_robot_can_calibrate_on_reference_frames_of_a_realistic_detector():
+    """Counted on reference houses seen by a realistic camera and detector: the per-cell estimate absorbs the
+    cos⁴ bearing loss into its p_max (mean of cos⁴ over the ±35° opening ≈ 0.75, so p_max ≈ 0.9 · 0.75 near by)
+    and the distractor sites into its false-positive rate (above the realistic detector's 0.01 per cell)."""
+    robot = robot_detector_model(realistic=True)
+    assert isinstance(robot, DetectorModel) and robot is not robot_detector_model()
+    assert robot.half_range is None and robot.angle_power == 0 and not robot.correlated
+    beta = np.linspace(-np.deg2rad(35), np.deg2rad(35), 10_001)
+    assert robot.p_max == pytest.approx(0.9 * np.mean(np.cos(beta) ** 4), abs=0.05)
+    assert robot.false_positive > 0.01
+    with pytest.raises(TypeError, match="realistic must be True or False"):
+        robot_detector_model(realistic="yes")
