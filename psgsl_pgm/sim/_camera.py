@@ -17,7 +17,8 @@ Occlusion (``Camera.occlusion``):
   z_low ≤ h + (z_t − h) · t < z_high (:func:`psgsl_pgm.geometry._sight.rays_clear_above`). So a floor cell
   behind a table is hidden when the table's top is above the ray to the floor, an object behind a taller one
   is hidden, and a lower one in front of it hides nothing (the far cells of a flat top seen from above stay in
-  view; a ray that only grazes a top face passes).
+  view; a ray that only grazes a top face passes). In a voxel frame a column seen by this rule shows the
+  voxels within the vertical opening (the rule is not applied per voxel).
 
 What a camera sees from a pose depends on the walls only, so the visible cells are kept per grid (for as long
 as the grid lives) and pose: a robot that looks again from the same pose does not recompute its view.

@@ -299,3 +299,18 @@ def test_bad_inputs_name_what_was_expected():
     with pytest.raises(TypeError, match="House"):
         DetectorErrors.draw(det, house.grid, np.random.default_rng(0))
     assert OTHER in det.classes
+
+
+def test_voxel_frames_with_persistent_errors():
+    """In a voxel frame an instance's persistent label applies to the voxels of its height range only."""
+    house = _corridor([_box("microwave", 2.05, (0.3, 0.5), (0.9, 1.2))])
+    det = DetectorModel.realistic(persistence=1.0, distractors=0, false_positive=0.0)
+    tv = det.labels.index("tv")
+    errors = DetectorErrors(np.array([tv]), np.full(house.shape, -1))
+    edges = np.array([0.0, 0.5, 1.0, 1.5])
+    f = take_frame(house, POSE, camera=Camera(max_range=9.0, vertical_half_angle=np.deg2rad(60)), detector=det,
+                   rng=np.random.default_rng(0), errors=errors, layer_edges=edges)
+    on = house.object_masks[0][f.cells[:, 0], f.cells[:, 1]]
+    shown = f.labels != det.nothing
+    assert (f.labels[shown] == tv).all() and shown.any()  # ρ = 1: every detection reads the persistent label
+    assert set(f.layers[shown].tolist()) <= {1, 2} and (on[shown]).all()  # the microwave spans layers 1 and 2
