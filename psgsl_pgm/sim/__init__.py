@@ -25,10 +25,10 @@ camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`)
 
 from ..geometry._grid import GridMap  # the core's grid (psgsl_pgm.GridMap), re-exported for simulator users
 from ..geometry._sight import LineOfSightCache, cells_clear  # the core's one line-of-sight rule
-from ._camera import Camera, Frame, take_frame
+from ._camera import OCCLUSIONS, Camera, Frame, take_frame
 from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
-from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
+from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorErrors, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._generate import AREA_RANGE, ROOM_RANGE, GeneratedHouse, generate_house
 from ._generated_ontology import GENERATOR_REFERENCE_SEEDS, generated_ontology
@@ -49,6 +49,7 @@ __all__ = [
     "Anemometer",
     "Camera",
     "DEFAULT_CONFUSION_GROUPS",
+    "DetectorErrors",
     "DetectorModel",
     "FilamentModel",
     "FilamentParams",
@@ -63,6 +64,7 @@ __all__ = [
     "House",
     "LineOfSightCache",
     "NOTHING",
+    "OCCLUSIONS",
     "OTHER",
     "ROOM_RANGE",
     "SceneObject",

@@ -15,7 +15,7 @@ import numpy as np
 from .._shared._validate import real_pair
 from ._camera import Camera, Frame, take_frame
 from ._classes import reindex
-from ._detector import DetectorModel
+from ._detector import DetectorErrors, DetectorModel
 from ._filaments import FilamentModel, FilamentParams
 from ._house import House, default_house
 from ._semantic_map import SemanticMap
@@ -35,6 +35,9 @@ class World:
     gas : FilamentModel
     camera : Camera
     detector : DetectorModel
+    detector_errors : DetectorErrors or None
+        The detector's errors fixed for this world, drawn from its seed (None for a detector without
+        persistent or recurring errors).
     gas_sensor : GasSensor
     anemometer : Anemometer
     source : (2,) ndarray
@@ -60,6 +63,10 @@ class World:
         r1, r2, r3 = (np.random.default_rng(s) for s in ss.spawn(3))
         self._rng_gas_sensor, self._rng_anemometer, self._rng_camera = r1, r2, r3
         self._sensor_state = 0.0
+        # the detector's errors fixed for this world (persistent instance labels, distractor sites): drawn once
+        # from a fourth stream of the seed (the three above are untouched), only for a detector that has them
+        self.detector_errors = (DetectorErrors.draw(detector, house, np.random.default_rng(ss.spawn(1)[0]))
+                                if detector.correlated else None)
 
     @property
     def source(self) -> np.ndarray:
@@ -107,7 +114,7 @@ class World:
     def camera_frame(self, pose, *, model: DetectorModel | None = None, layer_edges=None) -> Frame:
         """One camera frame from ``pose`` = (x, y, heading); see :func:`take_frame`."""
         return take_frame(self.house, pose, camera=self.camera, detector=self.detector, rng=self._rng_camera,
-                          model=model, layer_edges=layer_edges)
+                          model=model, layer_edges=layer_edges, errors=self.detector_errors)
 
     def semantic_map(self, class_prior, *, room_table=None, room_names=None, layers: int | None = None) -> SemanticMap:
         """Initial class beliefs over the house in the detector's class order.
