@@ -7,7 +7,8 @@ from every stored run by :func:`psgsl_pgm.search.write_search_outputs`) and prin
 per source × policy/variant: runs found with the Wilson interval, RMST with its Greenwood interval, the
 Kaplan–Meier median, the final error, the coverage of the 90 % region at ¼, ½, ¾ and the end with its mean
 area, and the median HPD level of the true source; then every paired RMST difference with its bootstrap
-interval, sign-flip p-value and Holm-adjusted p-value. Groups with fewer than ``--min-runs`` runs are left out.
+interval, sign-flip p-value and Holm-adjusted p-value, every comparison but the primary one marked exploratory and
+one on fewer than 20 paired seeds flagged. Groups with fewer than ``--min-runs`` runs are left out.
 
 Then, from the stored runs (``OUT/runs/*.npz``), the closed loop's final credible region against the fixed tour's
 at the same elapsed time on the same seed: a closed-loop run ends when it finds the source, so its "final"
@@ -26,6 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+#: Below this many paired seeds a comparison is flagged (as the benchmark's report does).
+MIN_PAIRS = 20
+
 SOURCES = {"oven": "oven (kitchen)", "bed": "bed (bedroom, off-ontology)", "5_6": "floor point (5.0, 6.0), hallway"}
 
 
@@ -43,6 +47,17 @@ def _row(source, key, s):
             f"{s['final_error']['mean']:.2f} | {cov['quarter']:.2f} / {cov['half']:.2f} / "
             f"{cov['three_quarters']:.2f} / **{cov['final']:.2f}** | {s['region_area90']['mean']:.1f} | "
             f"{s['hpd_level']['median']:.2f} |")
+
+
+def paired_line(name: str, v: dict) -> str:
+    """One comparison of ``paired.json`` as a list item: difference, interval, p-values, n, and whether it is the
+    primary comparison or exploratory (flagged when fewer than :data:`MIN_PAIRS` seeds are paired)."""
+    d = v["rmst_difference"]
+    tag = " — **primary**" if v.get("primary") else " — exploratory"
+    if v["n"] < MIN_PAIRS:
+        tag += f" — fewer than {MIN_PAIRS} paired seeds: the interval is unreliable"
+    return (f"  * {name}: {d['value']:+.0f} s [{d['ci95'][0]:+.0f}, {d['ci95'][1]:+.0f}], "
+            f"p = {v['p_value']:.4f}, p_Holm = {v['p_holm']:.4f} (n = {v['n']}){tag}")
 
 
 def matched_tour(runs_dir, estimator: str, *, min_pairs: int = 1) -> dict:
@@ -135,10 +150,7 @@ def main(argv=None) -> int:
                 continue
             print(f"* {name}:")
             for k, v in rows:
-                d = v["rmst_difference"]
-                tag = " — **primary**" if v.get("primary") else ""
-                print(f"  * {k}: {d['value']:+.0f} s [{d['ci95'][0]:+.0f}, {d['ci95'][1]:+.0f}], "
-                      f"p = {v['p_value']:.4f}, p_Holm = {v['p_holm']:.4f} (n = {v['n']}){tag}")
+                print(paired_line(k, v))
         matched = matched_tour(args.out / "runs", est, min_pairs=args.min_runs)
         if matched:
             print("\nThe 90 % region at the closed-loop run's end and the tour's at the same elapsed time, same seeds "

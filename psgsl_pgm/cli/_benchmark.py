@@ -11,9 +11,11 @@ from ._grid import (
     add_found_arguments,
     add_scheduler_argument,
     add_workers_argument,
+    add_world_model_argument,
     interrupted,
     positive_float,
     seed_count,
+    world_model,
 )
 
 __all__ = ["add_parser", "run"]
@@ -40,16 +42,24 @@ def add_parser(subparsers):
     """Register ``psgsl benchmark``."""
     from ..search._benchmark import BENCHMARK_POLICIES, BENCHMARK_VARIANTS
     from ..search._episodes import CONDITIONS
+    from ..search._split import SPLITS, TEST_HOMES, TEST_SEEDS
 
     p = subparsers.add_parser("benchmark", help="closed-loop search in many generated homes (or one world file): "
                               "sources drawn from the ontology, right/wrong/no-rooms ontology, a report")
+    p.add_argument("--split", choices=SPLITS, default="dev",
+                   help=f"development homes and seeds (dev: homes N..N+H-1, seeds 0..S-1) or the test set, run once "
+                   f"per release (test: homes {TEST_HOMES.start}-{TEST_HOMES.stop - 1}, seeds {TEST_SEEDS.start}-"
+                   f"{TEST_SEEDS.stop - 1}; no --first-house) (default: %(default)s)")
     p.add_argument("--houses", type=_house_count, default=0,
-                   help="generated homes H: psgsl_pgm.sim.generate_house seeds N..N+H-1 (0 with --world)")
-    p.add_argument("--first-house", type=int, default=0, metavar="N", help="first house seed N (default: 0)")
+                   help="generated homes H: psgsl_pgm.sim.generate_house seeds N..N+H-1 (0 with --world; with "
+                   f"--split test the first H test homes, 0: all {len(TEST_HOMES)})")
+    p.add_argument("--first-house", type=int, default=None, metavar="N",
+                   help="first house seed N of the dev split (default: 0)")
     p.add_argument("--world", default=None,
                    help="a world file instead of generated homes (e.g. the lab's house B), reported apart")
     p.add_argument("--seeds", type=seed_count, default=5,
-                   help=f"episodes per house S, at most {MAX_SEEDS}: seeds 0..S-1 (default: %(default)s)")
+                   help=f"episodes per house S, at most {MAX_SEEDS}: seeds 0..S-1 (with --split test the first S "
+                   f"test seeds, at most {len(TEST_SEEDS)}) (default: %(default)s)")
     p.add_argument("--policies", nargs="+", default=list(BENCHMARK_POLICIES),
                    help="closed-loop policies (default: %(default)s)")
     p.add_argument("--variants", nargs="+", default=list(BENCHMARK_VARIANTS),
@@ -71,6 +81,7 @@ def add_parser(subparsers):
     add_found_arguments(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
+    add_world_model_argument(p)
     p.add_argument("--out", default="psgsl-benchmark", help="output directory (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
@@ -89,6 +100,7 @@ def _run(args) -> int:
     from ..runs._runner import GridInterrupted
     from ..search import SearchConfig
     from ..search._benchmark import run_benchmark
+    from ..search._split import benchmark_sample
 
     options = {k: v for k, v in (("n_rooms", args.rooms), ("area", args.area), ("room_types", args.room_types))
                if v is not None}
@@ -96,9 +108,17 @@ def _run(args) -> int:
         raise ValueError("--rooms, --area and --room-types shape generated homes; they do not apply with --world")
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", args.clearance)) if v is not None}
     search = SearchConfig(time_budget=args.budget, **geometry)
+    from ..experiment import ExperimentConfig
+
+    config = ExperimentConfig(world_model=world_model(args.world_model))
+    # a test split with --first-house, too many homes or seeds, dev homes in the test set: one line, exit 2,
+    # before anything is written
+    house_ids, seed_ids = benchmark_sample(args.split, houses=args.houses, seeds=args.seeds,
+                                           first_house=args.first_house, world=args.world is not None)
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
-    what = args.world if args.world is not None else f"{args.houses} generated homes"
-    print(f"psgsl benchmark: {what}, {args.seeds} seeds, policies {' '.join(args.policies)}, variants "
+    what = args.world if args.world is not None else f"{len(house_ids)} generated homes"
+    print(f"psgsl benchmark: {what} ({args.split} split), seeds {seed_ids.start}-{seed_ids.stop - 1}, policies "
+          f"{' '.join(args.policies)}, variants "
           f"{' '.join(args.variants)}, conditions {' '.join(args.conditions)} -> {args.out}", flush=True)
     command = "psgsl " + " ".join(shlex.quote(a) for a in getattr(args, "argv", []))
     try:
@@ -106,8 +126,8 @@ def _run(args) -> int:
                                 policies=args.policies, variants=args.variants, conditions=args.conditions,
                                 off_rate=args.off_rate, gases=args.gases, first_house=args.first_house,
                                 house_options=options, workers=args.workers, scheduler=args.scheduler,
-                                search=search, progress=not args.quiet, figures=not args.no_figures,
-                                command=command)
+                                config=config, search=search, progress=not args.quiet, figures=not args.no_figures,
+                                command=command, split=args.split)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     p = summary["primary"]["result"]

@@ -22,8 +22,8 @@ import sys
 
 __all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS",
            "add_found_arguments", "add_missed_hits_argument", "add_ontology_argument", "add_scheduler_argument",
-           "add_workers_argument", "add_world_arguments", "interrupted", "missed_hit_rate", "positive_float",
-           "positive_int", "seed_count", "seed_range", "unit_float", "worker_count", "world_sources"]
+           "add_workers_argument", "add_world_arguments", "add_world_model_argument", "interrupted", "missed_hit_rate", "positive_float",
+           "positive_int", "seed_count", "seed_range", "unit_float", "worker_count", "world_model", "world_sources"]
 
 #: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
@@ -100,6 +100,29 @@ def add_ontology_argument(parser) -> None:
     parser.add_argument("--off-ontology", type=unit_float, default=0.0, metavar="EPS",
                         help="the robot's prior probability that a source is off its ontology (emitted by whatever "
                         "is in its cell), mixed into p(o | s): 0 uses the ontology as it stands (default: 0)")
+
+
+def add_world_model_argument(parser) -> None:
+    """``--world-model``, shared by ``psgsl experiment``, ``psgsl search`` and ``psgsl benchmark`` (checked by
+    :func:`world_model` when the command runs)."""
+    parser.add_argument("--world-model", default=None, metavar="MODEL",
+                        help="the simulated world: 'ideal' (built from the robot's own assumptions), 'realistic' "
+                        "(CFD wind, MOX gas sensor, occluding camera with persistent errors, localisation error) or "
+                        "'ideal+' components of these: cfd-wind, mox, camera, pose (default: the world file's "
+                        "'model', else ideal)")
+
+
+def world_model(text):
+    """The value of ``--world-model`` (its canonical name), or None when not given; a bad name is a
+    :class:`ValueError` naming the option (the command reports it in one line, exit code 2, before any output)."""
+    if text is None:
+        return None
+    from ..sim._world_model import WorldModel
+
+    try:
+        return WorldModel.parse(text).name
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"--world-model: {exc}") from None
 
 
 def seed_count(text):

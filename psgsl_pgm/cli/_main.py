@@ -26,10 +26,12 @@ from ._grid import (
     add_scheduler_argument,
     add_workers_argument,
     add_world_arguments,
+    add_world_model_argument,
     interrupted,
     positive_int,
     seed_count,
     seed_range,
+    world_model,
     world_sources,
 )
 from ._usage import UsageError as _UsageError
@@ -97,7 +99,8 @@ def _experiment(args) -> int:
     spec, names, sources = world_sources(args)
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology,
-                              missed_hit_rate=missed_hit_rate(args.missed_hit_rate), **gas)
+                              missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
+                              world_model=world_model(args.world_model), **gas)
     if spec is not None:
         for s in sources:  # every source must exist in this world before any run starts
             spec.resolve_source(s, spec.house(0))
@@ -234,6 +237,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="olfactory estimators (default: both)")
     add_ontology_argument(exp)
     add_missed_hits_argument(exp)
+    add_world_model_argument(exp)
     add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)

@@ -15,11 +15,13 @@ from ._grid import (
     add_scheduler_argument,
     add_workers_argument,
     add_world_arguments,
+    add_world_model_argument,
     interrupted,
     positive_float,
     positive_int,
     seed_count,
     seed_range,
+    world_model,
     world_sources,
 )
 
@@ -32,6 +34,7 @@ def add_parser(subparsers):
     """Register ``psgsl search``."""
     from ..experiment import ESTIMATORS, VARIANTS
     from ..search import OPEN_SPACE_POLICIES, POLICIES, SCORES
+    from ..search._split import SPLITS, TEST_SEEDS
 
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
@@ -42,10 +45,14 @@ def add_parser(subparsers):
                    help="information variants (default: %(default)s)")
     p.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis"],
                    help="olfactory estimators (default: %(default)s)")
-    p.add_argument("--seeds", type=seed_count, default=10,
-                   help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
-    p.add_argument("--first-seed", default="0", metavar="N",
-                   help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
+    p.add_argument("--split", choices=SPLITS, default="dev",
+                   help=f"development seeds (dev: N..N+S-1) or the test seeds, run once per release (test: "
+                   f"{TEST_SEEDS.start}-{TEST_SEEDS.stop - 1}; no --first-seed) (default: %(default)s)")
+    p.add_argument("--seeds", type=seed_count, default=None,
+                   help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: 10; with --split test "
+                   f"the first S test seeds, default all {len(TEST_SEEDS)})")
+    p.add_argument("--first-seed", default=None, metavar="N",
+                   help="first seed N of the dev split, an integer >= 0 (default: 0)")
     p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
     p.add_argument("--score", choices=SCORES, default="per-time",
@@ -54,6 +61,7 @@ def add_parser(subparsers):
     add_found_arguments(p)
     add_ontology_argument(p)
     add_missed_hits_argument(p)
+    add_world_model_argument(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
@@ -117,6 +125,16 @@ def format_search_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
+def _seeds(args) -> range:
+    """The seeds of ``--split``, ``--seeds`` and ``--first-seed`` (:func:`psgsl_pgm.search._split.house_seeds`)."""
+    from ..search._split import house_seeds
+
+    if args.split == "test":
+        return house_seeds("test", seeds=args.seeds, first_seed=args.first_seed)
+    seeds = seed_range("0" if args.first_seed is None else args.first_seed, 10 if args.seeds is None else args.seeds)
+    return house_seeds("dev", seeds=len(seeds), first_seed=seeds.start)
+
+
 def run(args) -> int:
     """Run ``psgsl search``; returns the exit code (bad input: one line on stderr, exit 2)."""
     from ._usage import reporting_usage_errors
@@ -132,11 +150,13 @@ def _run(args) -> int:
     from ..search import SearchConfig
     from ..search._grid import run_search_grid
 
-    seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
+    # a bad --first-seed, a test split with --first-seed or too many seeds, dev seeds in the test set: one line,
+    # exit 2, nothing written
+    seeds = _seeds(args)
     spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(off_ontology=args.off_ontology, missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
-                              **gas)
+                              world_model=world_model(args.world_model), **gas)
     clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", clearance)) if v is not None}
     from ..search import check_findable
@@ -156,6 +176,7 @@ def _run(args) -> int:
                                     world=args.world, record=args.record)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
+    print(f"split {args.split}: seeds {seeds.start}-{seeds.stop - 1}")
     for key, summary in summaries.items():
         print(f"source/estimator {key}")
         print(format_search_table(summary))

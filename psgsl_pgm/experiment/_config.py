@@ -86,6 +86,10 @@ class ExperimentConfig:
         ε in [0, 1]: the robot's prior probability that the source is off its ontology (emitted by whatever is in
         its cell), mixed into its p(o | s, γ) by :meth:`psgsl_pgm.Ontology.source_likelihood` — for the semantic
         term and φ_O alike. 0 (the default): the ontology as it stands.
+    world_model : str, optional
+        The simulated world's model (:class:`psgsl_pgm.sim.WorldModel`): ``ideal``, ``realistic`` or
+        ``ideal+COMPONENT…``; None (the default): the world file's ``model`` (``ideal`` for the embedded house).
+        The robot's models are the same in every world: only what the world does differs.
     stops : int, optional
         Follow only the first ``stops`` stops of the tour (default: the whole tour). For quick checks and tests
         of the grid machinery; never part of a reported experiment.
@@ -106,6 +110,7 @@ class ExperimentConfig:
     wind_refresh: float = 0.05
     detector_model: str = "estimated"
     off_ontology: float = field(default=0.0, metadata={OMIT_DEFAULT: True})
+    world_model: str | None = field(default=None, metadata={OMIT_DEFAULT: True})
     stops: int | None = None
 
     def __post_init__(self):
@@ -119,10 +124,14 @@ class ExperimentConfig:
             object.__setattr__(self, "parameter_grid", tuple(tuple(float(v) for v in row)
                                                              for row in self.parameter_grid))
         for f in fields(self):
-            if f.name in ("gas", "stops", "detector_model", "parameter_grid"):
+            if f.name in ("gas", "stops", "detector_model", "parameter_grid", "world_model"):
                 continue
             v = positive(getattr(self, f.name), f.name, allow_zero=f.name in _MAY_BE_ZERO)  # bools, strings refused
             object.__setattr__(self, f.name, v)
+        if self.world_model is not None:  # the canonical name, so that one model has one run key
+            from ..sim._world_model import WorldModel
+
+            object.__setattr__(self, "world_model", WorldModel.parse(self.world_model).name)
         if self.detector_model not in DETECTOR_MODELS:
             raise ValueError(f"detector_model must be one of {DETECTOR_MODELS}, got {self.detector_model!r}")
         if not self.off_ontology <= 1:

@@ -11,7 +11,11 @@ detector model estimated on reference houses.
   the simulator's detector and compared with those houses' true class maps
   (:meth:`psgsl_pgm.sim.DetectorModel.from_counts`: Dirichlet-smoothed confusion, false-positive rate, and the
   maximum-likelihood detection curve). The evaluation's frames are then *read* with this estimate, while they
-  are *made* by the simulator's detector.
+  are *made* by the simulator's detector. With ``realistic=True`` the reference frames are made by a detector
+  of the realistic kind (:meth:`psgsl_pgm.sim.DetectorModel.realistic`, furniture occlusion, each reference
+  house's own persistent errors and distractor sites from ``frame_seed``) — the calibration a robot makes with
+  its own detector on labelled houses; the estimate is still the per-cell model of ``from_counts``, which
+  knows nothing of the errors' persistence.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..sim import HOUSE_CLASSES, Camera, DetectorModel, default_house, potential_flow, take_frame
+from ..sim import HOUSE_CLASSES, Camera, DetectorErrors, DetectorModel, default_house, potential_flow, take_frame
 from ..sim._classes import OTHER, match_names
 from ..sim._house_ontology import REFERENCE_SEEDS
 from ._tour import exploration_tour
@@ -47,14 +51,19 @@ def wind_basis(house) -> np.ndarray:
 
 
 @lru_cache(maxsize=4)
-def _estimated(seeds: tuple, pseudo_count: float, frame_seed: int) -> DetectorModel:
+def _estimated(seeds: tuple, pseudo_count: float, frame_seed: int, realistic: bool = False) -> DetectorModel:
     truth_c, labels, dist = [], [], []
     classes = None
     rng = np.random.default_rng(frame_seed)
-    camera = Camera()
+    camera = Camera(occlusion="furniture") if realistic else Camera()
     for s in seeds:
         house = default_house(s)
-        detector = DetectorModel.default(house.classes)  # the reference house's (simulated) detector
+        errors = None
+        if realistic:
+            detector = DetectorModel.realistic(house.classes)
+            errors = DetectorErrors.draw(detector, house, rng)
+        else:
+            detector = DetectorModel.default(house.classes)  # the reference house's (simulated) detector
         classes = detector.classes if classes is None else classes
         idx = match_names(house.classes, classes)
         idx = np.where(idx < 0, list(classes).index(OTHER), idx)
@@ -62,7 +71,8 @@ def _estimated(seeds: tuple, pseudo_count: float, frame_seed: int) -> DetectorMo
         tour = exploration_tour(house)
         for stop, headings in zip(tour.stops[::_STOP_STRIDE], tour.headings[::_STOP_STRIDE]):
             for heading in headings:
-                frame = take_frame(house, (stop[0], stop[1], heading), camera=camera, detector=detector, rng=rng)
+                frame = take_frame(house, (stop[0], stop[1], heading), camera=camera, detector=detector, rng=rng,
+                                   errors=errors)
                 truth_c.append(truth[frame.cells[:, 0], frame.cells[:, 1]])
                 labels.append(frame.labels)
                 dist.append(frame.distance)
@@ -71,7 +81,7 @@ def _estimated(seeds: tuple, pseudo_count: float, frame_seed: int) -> DetectorMo
 
 
 def robot_detector_model(classes=HOUSE_CLASSES, *, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0,
-                         frame_seed: int = 0) -> DetectorModel | None:
+                         frame_seed: int = 0, realistic: bool = False) -> DetectorModel | None:
     """The robot's detector model, estimated from frames of the reference houses (module docstring).
 
     Parameters
@@ -86,6 +96,8 @@ def robot_detector_model(classes=HOUSE_CLASSES, *, reference_seeds=REFERENCE_SEE
         Dirichlet α of :meth:`DetectorModel.from_counts`.
     frame_seed : int, keyword-only
         Seed of the detector's random labels on the reference frames.
+    realistic : bool, keyword-only
+        Make the reference frames with a realistic camera and detector (module docstring).
 
     Returns
     -------
@@ -96,4 +108,8 @@ def robot_detector_model(classes=HOUSE_CLASSES, *, reference_seeds=REFERENCE_SEE
     seeds = tuple(int(s) for s in reference_seeds)
     if not seeds:
         raise ValueError("reference_seeds must name at least one reference house")
+    if not isinstance(realistic, (bool, np.bool_)):
+        raise TypeError(f"realistic must be True or False, got {type(realistic).__name__} {realistic!r}")
+    if realistic:
+        return _estimated(seeds, float(pseudo_count), int(frame_seed), True)
     return _estimated(seeds, float(pseudo_count), int(frame_seed))

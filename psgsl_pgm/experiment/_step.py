@@ -67,7 +67,7 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
     spec = parse_source(source)
     setting = default_world() if world_spec is None else world_spec
     if world is None:
-        world = setting.make_world(int(seed), spec, warm_up=config.warm_up)
+        world = setting.make_world(int(seed), spec, warm_up=config.warm_up, model=config.world_model)
     return config, spec, setting, world
 
 
@@ -197,7 +197,13 @@ class VariantPosteriors:
         self._wind_solved = np.zeros(self.wind.basis.shape[0])  # coefficients behind the current plume model
         self.n_wind_solves = 0
         self.model = self._plume(self._wind_solved)
-        self.detector_model = robot_detector_model(classes) if config.detector_model == "estimated" else None
+        # the robot calibrates its detector with the camera it carries: frames of the reference houses taken as
+        # its world takes them (occluding, with persistent errors, in a world whose model has the camera)
+        from ..sim._world_model import WorldModel
+
+        own_camera = "camera" in WorldModel.parse(config.world_model or getattr(setting, "model", "ideal"))
+        self.detector_model = robot_detector_model(classes, realistic=own_camera) \
+            if config.detector_model == "estimated" else None
         self.estimator = make_estimator(estimator, self.model, config,
                                         prior=setting.region_mask(house).astype(np.float64))
 

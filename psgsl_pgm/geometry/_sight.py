@@ -20,6 +20,10 @@ Two exact implementations of the same rule:
   are compared through the angles of gcd-reduced integer vectors, so equal directions give equal floats and
   a corner touch is never missed. Cost O(A log B): A cells in the rings up to the one where the shadows close
   (in a room: the room, not range² per ray), B merged shadow intervals; memory O(one ring + B).
+
+The same supercover in 2.5-D, :func:`rays_clear_above`: cells with a vertical extent [z_low, z_high) (furniture)
+and a ray between two heights; a cell the segment meets hides the ray when the ray's height above that cell's
+centre lies within its extent (the camera's furniture occlusion, ``psgsl_pgm.sim.Camera(occlusion="furniture")``).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from collections import OrderedDict
 
 import numpy as np
 
-__all__ = ["cells_clear", "LineOfSightCache", "visible_from"]
+__all__ = ["cells_clear", "LineOfSightCache", "rays_clear_above", "visible_from"]
 
 
 def cells_clear(occupancy: np.ndarray, rc0, rc1) -> np.ndarray:
@@ -64,6 +68,67 @@ def cells_clear(occupancy: np.ndarray, rc0, rc1) -> np.ndarray:
 
     clear = np.empty(a.shape[0], dtype=bool)
     clear_segments(np.ascontiguousarray(occ), a, b, clear)
+    return clear
+
+
+def rays_clear_above(z_low, z_high, origin, targets, *, eye: float, tops) -> np.ndarray:
+    """Whether rays between heights pass over (or under) every cell they cross: the 2.5-D line of sight.
+
+    The ray n runs from height ``eye`` above the centre of the ``origin`` cell to height ``tops[n]`` above the
+    centre of ``targets[n]``. It meets the cells of the supercover of the segment between the two centres (the
+    rule of :func:`cells_clear`, corner touches included). Such a cell (r, c), not one of the two end cells, hides
+    the ray when the ray's height above it, y = eye + (top − eye) · t, satisfies
+    ``z_low[r, c] <= y < z_high[r, c]``. Here t ∈ [0, 1] is the projection of the cell's centre on the segment.
+    A ray grazing a cell's top face is not hidden. A cell with z_low = +inf never hides, a wall
+    (−inf, +inf) always does.
+
+    Parameters
+    ----------
+    z_low, z_high : (H, W) array_like of float
+        Vertical extent of each cell's contents, metres above the floor.
+    origin : (2,) int
+        (row, col) of the eye.
+    targets : (n, 2) array_like of int
+        (row, col) of the targets, inside the grid.
+    eye : float, keyword-only
+        Height of the eye, metres.
+    tops : (n,) array_like of float, keyword-only
+        Height of each ray's end, metres.
+
+    Returns
+    -------
+    clear : (n,) ndarray of bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> lo = np.full((1, 5), np.inf); hi = np.full((1, 5), -np.inf)
+    >>> lo[0, 2], hi[0, 2] = 0.0, 0.8                      # a 0.8 m table in the middle cell
+    >>> rays_clear_above(lo, hi, (0, 0), [[0, 4], [0, 4]], eye=1.0, tops=[0.0, 0.9]).tolist()
+    [False, True]
+    """
+    lo = np.ascontiguousarray(z_low, dtype=np.float64)
+    hi = np.ascontiguousarray(z_high, dtype=np.float64)
+    if lo.ndim != 2 or lo.shape != hi.shape:
+        raise ValueError(f"z_low and z_high must be (H, W) arrays of one shape, got {lo.shape} and {hi.shape}")
+    if np.isnan(lo).any() or np.isnan(hi).any():
+        raise ValueError("z_low and z_high must not be NaN (+inf / -inf mark cells that never / always hide)")
+    t = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
+    z = np.asarray(tops, dtype=np.float64).reshape(-1)
+    if z.shape[0] != t.shape[0]:
+        raise ValueError(f"tops must have one height per target, got {z.shape[0]} for {t.shape[0]} targets")
+    if not (np.isfinite(eye) and np.all(np.isfinite(z))):
+        raise ValueError(f"eye and tops must be finite heights in metres, got eye={eye!r}")
+    h, w = lo.shape
+    r0, c0 = int(origin[0]), int(origin[1])
+    if not (0 <= r0 < h and 0 <= c0 < w):
+        raise ValueError(f"origin must lie inside the {h} x {w} grid, got {(r0, c0)}")
+    if t.size and (t[:, 0].min() < 0 or t[:, 0].max() >= h or t[:, 1].min() < 0 or t[:, 1].max() >= w):
+        raise ValueError(f"targets must lie inside the {h} x {w} grid")
+    from ..kernels._sight import clear_above  # compiled on first use (numba)
+
+    clear = np.empty(t.shape[0], dtype=bool)
+    clear_above(lo, hi, r0, c0, float(eye), t, z, clear)
     return clear
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from . import _cache as _numba_cache  # noqa: F401  (kernels cached in the user cache dir, not site-packages)
 from ._view import _exact
 
-__all__ = ["cast", "clear_segments", "segment_clear"]
+__all__ = ["cast", "clear_above", "clear_segments", "segment_clear", "segment_clear_above"]
 
 _JIT = dict(nogil=True, cache=True, error_model="numpy")
 
@@ -286,3 +286,62 @@ def cast(occupancy, cell, *, reach, disc=None, camera=None):
               bool(cam.half_angle >= math.pi), float(cam.min_range), float(cam.max_range), float(cam.heading),
               float(cam.half_angle), float(cam.offset), visible)
     return visible
+
+
+# ---- the 2.5-D test: a ray between two heights over the cells of one segment -------------------------------
+@nb.njit(inline="always", **_JIT)
+def _cell_blocks(z_low, z_high, r, c, r0, c0, dr, dc, n2, eye, top):
+    """Whether cell (r, c) holds the ray's height above its centre: z_low[r, c] <= y < z_high[r, c], with y the
+    height of the ray from (cell r0, c0; height eye) to (its end cell; height top) at the projection t of the cell
+    centre on the segment (t = ((r − r0) dr + (c − c0) dc) / n2, clamped to [0, 1])."""
+    t = ((r - r0) * dr + (c - c0) * dc) / n2
+    t = min(max(t, 0.0), 1.0)
+    y = eye + (top - eye) * t
+    return z_low[r, c] <= y < z_high[r, c]
+
+
+@nb.njit(inline="always", **_JIT)
+def _crossings_above(z_low, z_high, n_main, n_other, main0, other0, s_main, s_other, strict, rows_main, r0, c0,
+                     r1, c1, eye, top):
+    """No cell among those entered at the n_main crossings of the main axis (the enumeration of
+    :func:`_crossings_clear`), other than the end cell (r1, c1), holds the ray (:func:`_cell_blocks`)."""
+    h, w = z_low.shape
+    d = max(n_main, 1)
+    dr, dc = r1 - r0, c1 - c0
+    n2 = float(dr * dr + dc * dc)
+    for k in range(1, n_main + 1):
+        main = main0 + s_main * k
+        other = other0 + s_other * _count_below((2 * k - 1) * n_other, d, strict)
+        r, c = (main, other) if rows_main else (other, main)
+        r, c = min(max(r, 0), h - 1), min(max(c, 0), w - 1)
+        if (r != r1 or c != c1) and _cell_blocks(z_low, z_high, r, c, r0, c0, dr, dc, n2, eye, top):
+            return False
+    return True
+
+
+@nb.njit(**_JIT)
+def segment_clear_above(z_low, z_high, r0, c0, r1, c1, eye, top):
+    """Whether the ray from height ``eye`` over the centre of cell (r0, c0) to height ``top`` over the centre of
+    cell (r1, c1) passes every cell the segment meets (the supercover of :func:`segment_clear`: the same cells,
+    corner touches included) outside its vertical extent [z_low, z_high); the two end cells are not tested."""
+    dr, dc = r1 - r0, c1 - c0
+    nr, nc = abs(dr), abs(dc)
+    sr = 1 if dr > 0 else (-1 if dr < 0 else 0)
+    sc = 1 if dc > 0 else (-1 if dc < 0 else 0)
+    if nc:
+        if not _crossings_above(z_low, z_high, nc, nr, c0, r0, sc, sr, True, False, r0, c0, r1, c1, eye, top):
+            return False
+        if not _crossings_above(z_low, z_high, nc, nr, c0, r0, sc, sr, False, False, r0, c0, r1, c1, eye, top):
+            return False
+    if nr:
+        if not _crossings_above(z_low, z_high, nr, nc, r0, c0, sr, sc, True, True, r0, c0, r1, c1, eye, top):
+            return False
+    return True
+
+
+@nb.njit(**_JIT)
+def clear_above(z_low, z_high, r0, c0, eye, targets, tops, out):
+    """out[i] = :func:`segment_clear_above` from cell (r0, c0) at height ``eye`` to cell targets[i] ((n, 2)
+    int64 (row, col) inside the grid) at height tops[i]."""
+    for i in range(targets.shape[0]):
+        out[i] = segment_clear_above(z_low, z_high, r0, c0, targets[i, 0], targets[i, 1], eye, tops[i])

@@ -3,13 +3,16 @@ costs of off-ontology sources and of a wrong or room-less ontology (``report.md`
 
 Times to find are censored at the budget τ; every run is observed until it finds the source or τ, so the
 restricted mean RMST(τ) of an arm is the mean of min(T, τ) over its episodes (:func:`psgsl_pgm.search.rmst`).
-Intervals (RMST, success rate, ratios) are :func:`psgsl_pgm.search._survival.nested_bootstrap` over houses, then
-the seeds within each drawn house; a ratio of two arms is computed on the same resampled episodes (the arms are
-paired by episode). ``summary.json`` also gives the success rate's Wilson interval (episodes as independent).
+Intervals of RMSTs and ratios are :func:`psgsl_pgm.search._survival.nested_bootstrap` over houses, then the seeds
+within each drawn house; a ratio of two arms is computed on the same resampled episodes (the arms are paired by
+episode). The success rate's interval is the house-clustered Wilson interval
+(:func:`psgsl_pgm.search._metrics.clustered_wilson`), never a point; ``summary.json`` also gives the Wilson
+interval with the episodes as independent (``wilson95``).
 
 **The primary comparison, declared before any run:** RMST(τ) of ``infotaxis`` with ``semantics+rooms`` divided by
 RMST(τ) of ``infotaxis`` with ``olfaction`` alone, ``right-ontology``, over all episodes, with its 95 % interval
-(:data:`PRIMARY`). Below 1: semantics and rooms find sources sooner. Every other number is secondary.
+(:data:`PRIMARY`). Below 1: semantics and rooms find sources sooner. Every other number is secondary and
+exploratory. A comparison on fewer than :data:`MIN_EPISODES` paired episodes is flagged in ``report.md``.
 """
 
 from __future__ import annotations
@@ -20,15 +23,17 @@ from pathlib import Path
 import numpy as np
 
 from ..io._json import json_safe
-from ._metrics import wilson_interval
+from ._metrics import clustered_wilson, wilson_interval
 from ._store import load_search_run
 from ._survival import kaplan_meier, km_median, nested_bootstrap
 
-__all__ = ["PRIMARY", "write_report"]
+__all__ = ["MIN_EPISODES", "PRIMARY", "write_report"]
 
 #: The benchmark's primary comparison (module docstring): arm A over arm B in one condition.
 PRIMARY = {"condition": "right-ontology", "A": "infotaxis/semantics+rooms", "B": "infotaxis/olfaction",
            "statistic": "RMST ratio A / B", "level": 0.95}
+#: Below this many paired episodes report.md warns that a comparison's interval rests on few episodes.
+MIN_EPISODES = 20
 _SHARED = ("olfaction",)  # variants whose runs every condition shares with right-ontology (and the tour)
 
 
@@ -74,9 +79,10 @@ def _arm_stats(rows, tau: float) -> dict:
     km = kaplan_meier(t, found)
     houses = [r["house"] for r in rows]
     boot = nested_bootstrap(t, houses)
-    success = nested_bootstrap(found.astype(np.float64), houses)
+    success = clustered_wilson(found, houses)
     return {"n": len(rows), "houses": boot["groups"],
             "success_rate": {"value": success["value"], "ci95": success["ci95"],
+                             "design_effect": success["design_effect"], "interval": success["interval"],
                              "wilson95": wilson_interval(int(found.sum()), len(rows))},
             "rmst": {"value": boot["value"], "ci95": boot["ci95"], "tau": tau, "interval": boot["interval"]},
             "median": km_median(km), "km": km, "cpu_seconds": _mean_cpu(rows)}
@@ -126,6 +132,14 @@ def _fmt_ci(d, unit="", digits=1):
         return "n/a (an arm not run, or fewer than 2 paired episodes)"
     lo, hi = d["ci95"]
     return f"{d['value']:.{digits}f}{unit} [{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def _few(name: str, d) -> list:
+    """The one-line warning of a comparison on fewer than :data:`MIN_EPISODES` paired episodes (else none)."""
+    if d is None or d["n"] >= MIN_EPISODES:
+        return []
+    return [f"Warning: {name} rests on {d['n']} paired episodes (fewer than {MIN_EPISODES}); its interval is "
+            "unreliable.", ""]
 
 
 def _figures(out: Path, stats: dict, conditions) -> list:
@@ -179,7 +193,10 @@ def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, ve
     lines = [f"# psgsl benchmark: {title}", ""]
     if s.get("command"):
         lines += [f"Command: `{s['command']}`", ""]
-    lines += [f"psgsl-pgm {version}; houses {', '.join(s['houses'][:6])}{' …' if len(s['houses']) > 6 else ''} "
+    split = s.get("split", "dev")
+    what = "test homes and seeds, run once per release" if split == "test" else "development homes and seeds"
+    lines += [f"Split: **{split}** ({what}).", "",
+              f"psgsl-pgm {version}; houses {', '.join(s['houses'][:6])}{' …' if len(s['houses']) > 6 else ''} "
               f"({len(s['houses'])}); seeds {s['seeds'][0]}–{s['seeds'][-1]}; budget τ = {s['budget']:g} s; "
               f"estimator {s['estimator']}; gases {', '.join(s['gases'])}; off-ontology rate {s['off_rate']:g}.",
               "", "## Primary comparison (declared before the runs)", "",
@@ -190,15 +207,22 @@ def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, ve
     p = comp["primary"]
     lines += [f"**{_fmt_ci(p, digits=3)}**" + (f" (n = {p['n']} episodes in {p['houses']} houses; RMST A "
                                                 f"{p['rmst_A']:.1f} s, B {p['rmst_B']:.1f} s)" if p else ""), ""]
-    lines += ["## Costs beside it (secondary)", "", "| comparison | ratio [95 % CI] | n |", "|---|---|---|"]
+    lines += _few("the primary comparison", p)
+    lines += ["## Costs beside it (secondary, exploratory)", "",
+              "Exploratory: not declared before the runs and not corrected for multiplicity; they suggest, they do "
+              "not confirm.", "", "| comparison | ratio [95 % CI] | n |", "|---|---|---|"]
+    few = []
     for name, d in comp["costs"].items():
         lines.append(f"| {name} | {_fmt_ci(d, digits=3)} | {d['n'] if d else 0} |")
-    lines += ["", "Off-ontology: the primary ratio on the episodes whose source is a floor cell no ontology class "
+        few += _few(f"'{name}'", d)
+    lines += [""] + few
+    lines += ["Off-ontology: the primary ratio on the episodes whose source is a floor cell no ontology class "
               "holds, beside the ratio on object sources. Wrong ontology: p(o | s, γ) permuted among the object "
               "classes per house (a derangement); no rooms: no p(o | room). `tour` and the `olfaction` variant do "
               "not read the ontology: their runs are shared by every condition.", ""]
     for c, arms in stats.items():
-        lines += [f"## {c}", "", "| arm | n | houses | success [95 % CI] | RMST(τ) s [95 % CI] | KM median s | "
+        lines += [f"## {c}", "", "Success: house-clustered Wilson 95 % interval; RMST: nested bootstrap.", "",
+                  "| arm | n | houses | success [95 % CI] | RMST(τ) s [95 % CI] | KM median s | "
                   "CPU s/run |", "|---|---|---|---|---|---|---|"]
         for arm, d in arms.items():
             sr = d["success_rate"]

@@ -39,6 +39,7 @@ from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sourc
 from ._grid import closed_loop_in_world
 from ._loop import SearchConfig
 from ._policies import POLICIES
+from ._split import benchmark_sample, check_split
 from ._store import read_run_key, write_search_run
 
 __all__ = ["BENCHMARK_POLICIES", "BENCHMARK_VARIANTS", "benchmark_arms", "benchmark_episode", "run_benchmark"]
@@ -144,10 +145,10 @@ def _prepare_houses(out: Path, houses, *, gas: str, options: dict) -> dict:
 
 def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=BENCHMARK_POLICIES,
                   variants=BENCHMARK_VARIANTS, conditions=CONDITIONS, estimator: str = "infotaxis",
-                  off_rate: float = 0.1, gases=("smoke",), first_house: int = 0, house_options=None,
+                  off_rate: float = 0.1, gases=("smoke",), first_house: int | None = None, house_options=None,
                   workers: int = 2, scheduler: str | None = None, config: ExperimentConfig | None = None,
                   search: SearchConfig | None = None, progress: bool = True, figures: bool = True,
-                  command: str | None = None) -> dict:
+                  command: str | None = None, split: str = "dev") -> dict:
     """Run (or resume) the benchmark and write its report (module docstring).
 
     Parameters
@@ -156,9 +157,10 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         The benchmark's folder.
     houses : int, keyword-only
         Number of generated homes, seeds ``first_house`` … ``first_house + houses − 1`` of
-        :func:`psgsl_pgm.sim.generate_house`; 0 with ``world``.
+        :func:`psgsl_pgm.sim.generate_house`; 0 with ``world``. With ``split="test"``: the first ``houses`` of the
+        test homes (0: all of them).
     seeds : int, keyword-only
-        Episodes per house, seeds 0 … seeds − 1.
+        Episodes per house, seeds 0 … seeds − 1; with ``split="test"`` the first ``seeds`` of the test seeds.
     world : path, optional, keyword-only
         A world file (e.g. the lab's house B) instead of generated homes; its ontology is the world's.
     policies, variants, conditions : sequences of str, keyword-only
@@ -168,7 +170,8 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         Probability of an off-ontology source per episode.
     gases : sequence of str, keyword-only
         The gases an episode draws from (uniformly).
-    first_house : int, keyword-only
+    first_house : int, optional, keyword-only
+        The first generated home of the development split (default 0); not with ``split="test"``.
     house_options : dict, optional, keyword-only
         ``n_rooms``, ``area``, ``room_types`` of :func:`psgsl_pgm.sim.generate_house` for every home (checked
         before anything is written: an impossible request is a ValueError naming the option).
@@ -179,6 +182,8 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     progress, figures : bool, keyword-only
     command : str, optional, keyword-only
         The command line, quoted in the report.
+    split : {"dev", "test"}, keyword-only
+        The development or the test homes and seeds (:mod:`psgsl_pgm.search._split`); recorded in the report.
 
     Returns
     -------
@@ -209,7 +214,14 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     off_rate = unit_interval(off_rate, "off_rate")
     n_seeds = index(seeds, "seeds", minimum=1)
     n_houses = index(houses, "houses")
-    first_house = index(first_house, "first_house")
+    if first_house is not None:
+        first_house = index(first_house, "first_house")
+    split = check_split(split)
+    if world is not None and n_houses:
+        raise ValueError(f"give houses or a world file, not both (houses={n_houses}, world={world})")
+    house_range, seed_ids = benchmark_sample(split, houses=n_houses, seeds=n_seeds, first_house=first_house,
+                                             world=world is not None)
+    seed_ids = list(seed_ids)
     gases = tuple(gases)
     options = dict(house_options or {})
     unknown = sorted(set(options) - {"n_rooms", "area", "room_types"})
@@ -218,11 +230,12 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     if world is None:
         from ..sim._generate import _check_request
 
-        n, a, t = _check_request(first_house, options.get("n_rooms"), options.get("area"), options.get("room_types"))
+        n, a, t = _check_request(house_range.start, options.get("n_rooms"), options.get("area"),
+                                 options.get("room_types"))
         options = {k: v for k, v in (("n_rooms", n), ("area", a), ("room_types", t)) if v is not None}
-        if n_houses < 1:
+        if len(house_range) < 1:
             raise ValueError("houses must be >= 1 (or give a world file)")
-        house_ids = list(range(first_house, first_house + n_houses))
+        house_ids = list(house_range)
         clash = sorted(set(house_ids) & set(GENERATOR_REFERENCE_SEEDS))
         if clash:
             raise ValueError(f"houses must not include the generator's reference seeds (they give the ontology's "
@@ -232,8 +245,6 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     else:
         if options:
             raise ValueError(f"house_options shape generated homes; they do not apply to a world file, got {options}")
-        if n_houses:
-            raise ValueError(f"give houses or a world file, not both (houses={n_houses}, world={world})")
         world = Path(world).resolve()
         world_part = world_key(world)
         house_ids = [0]
@@ -262,14 +273,14 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         for h, lab in zip(house_ids, labels):
             spec = specs[lab]
             found = findable_sources(spec, found_radius=search.found_radius)
-            for s in range(n_seeds):
+            for s in seed_ids:
                 episodes[f"{lab}/{s}"] = draw_episode(spec, h, s, gases=gases, off_rate=off_rate, sources=found)
             for c in conditions:
                 cond_paths[lab, c] = condition_world(paths[lab], spec, c, h, out / "worlds", lab)
         _write_text(out / "episodes.json", json.dumps(episodes, indent=1, sort_keys=True) + "\n")
         digests = {k: digest(world_key(p)) for k, p in cond_paths.items()}
         jobs = []
-        for s, lab, c in itertools.product(range(n_seeds), labels, conditions):
+        for s, lab, c in itertools.product(seed_ids, labels, conditions):
             ep = episodes[f"{lab}/{s}"]
             cfg = replace(config, gas=ep["gas"])
             for p, v in benchmark_arms(policies, variants, c):
@@ -280,7 +291,7 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
                                      "label": {"house": lab, "condition": c, "episode": ep}}))
         run_grid(jobs, write=write, scheduler=scheduler, workers=workers, progress=progress,
                  desc="benchmark runs")
-        settings = {"houses": labels, "seeds": list(range(n_seeds)), "policies": list(policies),
+        settings = {"split": split, "houses": labels, "seeds": seed_ids, "policies": list(policies),
                     "variants": list(variants), "conditions": list(conditions), "estimator": estimator,
                     "off_rate": off_rate, "gases": list(gases), "budget": search.time_budget,
                     "world": None if world is None else str(world), "command": command}

@@ -18,6 +18,7 @@ from ..io._json import json_safe
 from ..runs._key import digest, run_key, world_key
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import wilson_interval
+from ._split import split_of_seeds
 from ._policies import POLICIES
 from ._store import load_search_run, read_run_key, search_run_path, write_search_run
 from ._survival import holm, kaplan_meier, km_median, paired_comparison, rmst
@@ -79,7 +80,8 @@ def summarize_runs(runs) -> dict:
     RMST(τ) = ∫₀^τ S(t) dt with its 95 % Greenwood interval, ``time_to_find.median`` the Kaplan–Meier median (None
     when more than half of the runs are not found). ``coverage90``, ``region_area90`` and ``hpd_level`` measure the
     calibration of the declared credible region (:func:`psgsl_pgm.experiment._metrics.calibration_summary`);
-    ``mean_error`` is the error averaged over the search time (:func:`_time_mean`).
+    ``mean_error`` is the error averaged over the search time (:func:`_time_mean`). ``split`` is the seeds'
+    split (:func:`psgsl_pgm.search._split.split_of_seeds`: ``"dev"``, ``"test"`` or ``"mixed"``).
     """
     runs = list(runs)
     found = np.array([r.found for r in runs])
@@ -102,6 +104,7 @@ def summarize_runs(runs) -> dict:
         "final_error": mean_ci([r.error[-1] for r in runs], lower=0.0),
         "mean_error": mean_ci([_time_mean(r.time, r.error) for r in runs], lower=0.0),
         "seeds": [int(r.seed) for r in runs],
+        "split": split_of_seeds(r.seed for r in runs),
     }
 
 
@@ -119,7 +122,8 @@ def _paired(groups: dict, *, source=None, estimator=None) -> dict:
     Each entry ``"A - B"`` holds ``rmst_difference`` = RMST_A(τ) − RMST_B(τ) in s (negative: A finds the source
     sooner) with its percentile-bootstrap interval over seeds, the sign-flip permutation ``p_value``, ``p_holm``
     (Holm's adjustment over the table's secondary comparisons; the primary comparison, :data:`PRIMARY`, is tested
-    alone and keeps its p-value), ``primary``, ``n`` and the runs found by each side."""
+    alone and keeps its p-value), ``primary``, ``exploratory`` (every comparison but the primary one: not declared
+    before the runs, it suggests and does not confirm), ``n`` and the runs found by each side."""
     out = {}
     for key, runs in groups.items():
         policy, variant = key.split("/")
@@ -142,7 +146,8 @@ def _paired(groups: dict, *, source=None, estimator=None) -> dict:
             primary = (source, estimator, name) == (PRIMARY["source"], PRIMARY["estimator"], PRIMARY["comparison"])
             out[name] = {
                 "rmst_difference": {"value": cmp["value"], "ci95": cmp["ci95"], "interval": cmp["interval"]},
-                "p_value": cmp["p_value"], "test": cmp["test"], "primary": primary, "n": cmp["n"],
+                "p_value": cmp["p_value"], "test": cmp["test"], "primary": primary, "exploratory": not primary,
+                "n": cmp["n"],
                 "seeds": seeds, "found": {"A": int(sum(a[s].found for s in seeds)),
                                           "B": int(sum(b[s].found for s in seeds))},
                 "direction": "A - B, s: negative when A finds the source sooner",

@@ -9,26 +9,91 @@ from scipy import stats
 
 from ..experiment._metrics import credible_region, hpd_level, mean_ci
 
-__all__ = ["credible_region", "hpd_level", "paired_difference", "survival", "wilson_interval"]
+__all__ = ["clustered_wilson", "credible_region", "hpd_level", "paired_difference", "survival", "wilson_interval"]
+
+
+def _wilson(p: float, n: float, level: float) -> list:
+    """Wilson score interval of a proportion ``p`` observed on ``n`` (possibly effective, non-integer) trials."""
+    z = stats.norm.ppf(0.5 + level / 2)
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    lo = 0.0 if p == 0 else max(0.0, centre - half)
+    hi = 1.0 if p == 1 else min(1.0, centre + half)
+    return [float(lo), float(hi)]
 
 
 def wilson_interval(successes: int, n: int, *, level: float = 0.95) -> list:
     """Wilson score interval of a binomial proportion, [lo, hi].
 
+    Never a point: at 0 or n successes it is [0, hi] or [lo, 1] with hi > 0, lo < 1 (the same interval as
+    ``scipy.stats.binomtest(successes, n).proportion_ci(method="wilson")``).
+
     Examples
     --------
     >>> [round(x, 4) for x in wilson_interval(8, 10)]
     [0.4902, 0.9433]
+    >>> [round(x, 4) for x in wilson_interval(10, 10)]
+    [0.7225, 1.0]
     """
     if n < 1:
         return [float("nan"), float("nan")]
-    z = stats.norm.ppf(0.5 + level / 2)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    lo = 0.0 if successes == 0 else max(0.0, centre - half)
-    hi = 1.0 if successes == n else min(1.0, centre + half)
-    return [float(lo), float(hi)]
+    return _wilson(successes / n, n, level)
+
+
+def clustered_wilson(successes, groups, *, level: float = 0.95) -> dict:
+    """Wilson interval of a success proportion over runs nested in groups (episodes in houses).
+
+    Episodes of one house share its floor plan, so they are not independent trials. The interval is Wilson's on the
+    effective number of trials n_eff = n / D, D the design effect (Kish, *Survey Sampling*, 1965, Sec. 5.4):
+    the ratio of the proportion's house-clustered variance, the ratio-estimator (linearisation) variance
+    Σ_g (y_g − p̂ m_g)² / n² over the G houses (y_g successes of m_g episodes), to the binomial p̂(1 − p̂)/n.
+    D is floored at 1 (houses never make episodes worth more than independent ones). Where it cannot be estimated
+    — p̂ = 0 or 1 (no variation to apportion), or a single group (a world file: its episodes are the units) —
+    D = 1: the limit of the estimate as failures become rare and isolated (one failing episode in a house gives
+    y_g − p̂ m_g ≈ −1, the binomial term). Two checks: one episode per house gives D = 1, the plain Wilson
+    interval; houses whose episodes all agree give D = m, the Wilson interval of the G houses.
+
+    Unlike a percentile bootstrap of the proportion, the interval is never a point: at p̂ = 1 it is [lo, 1] with
+    lo < 1.
+
+    Parameters
+    ----------
+    successes : (n,) array_like of bool
+        Each run's outcome.
+    groups : (n,) array_like
+        Each run's group (house) label.
+    level : float, keyword-only
+
+    Returns
+    -------
+    dict
+        ``{"value", "ci95", "design_effect", "n_effective", "n", "groups", "interval"}``.
+
+    Examples
+    --------
+    >>> r = clustered_wilson([True, True, True, True], ["a", "a", "b", "b"])
+    >>> r["value"], [round(x, 4) for x in r["ci95"]], r["design_effect"]
+    (1.0, [0.5101, 1.0], 1.0)
+    """
+    y = np.asarray(successes)
+    if y.ndim != 1 or y.size == 0 or y.dtype != bool:
+        raise ValueError(f"successes must be a non-empty 1-D bool array, got {y.dtype} of shape {y.shape}")
+    g = np.asarray(groups)
+    if g.shape != y.shape:
+        raise ValueError(f"groups must give one group per run, shape {y.shape}, got shape {g.shape}")
+    _, inv = np.unique(g, return_inverse=True)
+    n, n_groups = y.size, int(inv.max()) + 1
+    p = float(y.mean())
+    deff = 1.0
+    if 0.0 < p < 1.0 and n_groups > 1:
+        y_g = np.bincount(inv, weights=y.astype(np.float64))
+        m_g = np.bincount(inv).astype(np.float64)
+        clustered = float(np.sum((y_g - p * m_g) ** 2)) / (n * n)
+        deff = max(1.0, clustered / (p * (1.0 - p) / n))
+    n_eff = n / deff
+    return {"value": p, "ci95": _wilson(p, n_eff, level), "design_effect": deff, "n_effective": n_eff, "n": int(n),
+            "groups": n_groups,
+            "interval": "Wilson score interval on the effective sample size n / design effect (house-clustered)"}
 
 
 def paired_difference(a, b, *, level: float = 0.95) -> dict:

@@ -11,6 +11,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment, optionally with the robot's localisation
   error (:class:`LocalisationError`);
+* :class:`WorldModel` — the ``ideal`` world (built from the robot's own assumptions) or the ``realistic`` one (CFD
+  wind, a MOX sensor, an occluding camera with persistent errors, localisation error), one component at a time;
 * :func:`generate_house` — generated homes (3–8 typed rooms, doors, windows, furniture per room type, wind),
   each a world that can be written as a world file, with their ontology :func:`generated_ontology`;
 * :func:`load_world` — a user's house from a world file (map, rooms, objects, ontology, wind, sources); the
@@ -24,10 +26,10 @@ camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`)
 
 from ..geometry._grid import GridMap  # the core's grid (psgsl_pgm.GridMap), re-exported for simulator users
 from ..geometry._sight import LineOfSightCache, cells_clear  # the core's one line-of-sight rule
-from ._camera import Camera, Frame, take_frame
+from ._camera import OCCLUSIONS, Camera, Frame, take_frame
 from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
-from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorModel
+from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorErrors, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._generate import AREA_RANGE, ROOM_RANGE, GeneratedHouse, generate_house
 from ._generated_ontology import GENERATOR_REFERENCE_SEEDS, generated_ontology
@@ -41,6 +43,7 @@ from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
+from ._world_model import WORLD_COMPONENTS, WORLD_MODELS, WorldModel
 from ._worldfile import WorldSpec, default_world, load_world, navigable
 
 __all__ = [
@@ -48,6 +51,7 @@ __all__ = [
     "Anemometer",
     "Camera",
     "DEFAULT_CONFUSION_GROUPS",
+    "DetectorErrors",
     "DetectorModel",
     "FilamentModel",
     "FilamentParams",
@@ -63,13 +67,17 @@ __all__ = [
     "LineOfSightCache",
     "LocalisationError",
     "NOTHING",
+    "OCCLUSIONS",
     "OTHER",
     "ROOM_RANGE",
     "SceneObject",
     "SemanticMap",
     "WindField",
     "WindSequence",
+    "WORLD_COMPONENTS",
+    "WORLD_MODELS",
     "World",
+    "WorldModel",
     "WorldSpec",
     "box_footprint",
     "cells_clear",

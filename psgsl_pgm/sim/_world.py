@@ -22,12 +22,14 @@ robot cannot be inside or behind a wall it believes it is in front of). Only the
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .._shared._validate import real_pair
 from ._camera import Camera, Frame, take_frame
 from ._classes import reindex
-from ._detector import DetectorModel
+from ._detector import DetectorErrors, DetectorModel
 from ._filaments import FilamentModel, FilamentParams
 from ._house import House, default_house
 from ._pose import LocalisationError
@@ -48,6 +50,9 @@ class World:
     gas : FilamentModel
     camera : Camera
     detector : DetectorModel
+    detector_errors : DetectorErrors or None
+        The detector's errors fixed for this world, drawn from its seed (None for a detector without
+        persistent or recurring errors).
     gas_sensor : GasSensor
     anemometer : Anemometer
     source : (2,) ndarray
@@ -75,11 +80,16 @@ class World:
         r1, r2, r3 = (np.random.default_rng(s) for s in ss.spawn(3))
         self._rng_gas_sensor, self._rng_anemometer, self._rng_camera = r1, r2, r3
         self._sensor_state = 0.0
+        # the detector's errors fixed for this world (persistent instance labels, distractor sites): drawn once
+        # from a fourth stream of the seed (the three above are untouched), only for a detector that has them
+        self.detector_errors = (DetectorErrors.draw(detector, house, np.random.default_rng(ss.spawn(1)[0]))
+                                if detector.correlated else None)
         if localisation is not None and not isinstance(localisation, LocalisationError):
             raise TypeError(f"localisation must be a LocalisationError or None, got {type(localisation).__name__}")
         self.localisation = localisation
-        # the localisation offset's own stream: the seed sequence's fourth child, so the three above draw as before
-        self._rng_pose = np.random.default_rng(ss.spawn(1)[0])
+        # the localisation offset's own stream: the seed's child of a fixed spawn key, so every other stream (the
+        # three above and the detector's errors) draws as without it
+        self._rng_pose = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(0x905E,)))
         self._offsets = np.zeros((0, 3))  # e at t = k dt for k < len, drawn on demand in step order
 
     @property
@@ -212,11 +222,11 @@ class World:
         With a localisation error, ``pose`` is the pose the robot believes: the frame is taken from the true
         pose, and each observed cell is placed where the robot's believed pose puts it, q' = p + R(e_θ)(q − p_t)
         (p the believed and p_t the true position, q the cell's centre); cells placed off the map are dropped.
-        The frame's ``pose`` is the believed one and its distances are the measured (true) ones.
+        The frame's ``pose`` is the believed one; its distances and bearings are the measured (true) ones.
         """
         if self.localisation is None:
             return take_frame(self.house, pose, camera=self.camera, detector=self.detector, rng=self._rng_camera,
-                              model=model, layer_edges=layer_edges)
+                              model=model, layer_edges=layer_edges, errors=self.detector_errors)
         pose = np.asarray(pose, dtype=np.float64)
         if pose.shape != (3,) or not np.isfinite(pose).all():
             raise ValueError(f"pose must be a finite (x, y, heading) of shape (3,), got shape {pose.shape}")
@@ -224,14 +234,17 @@ class World:
         p = pose[:2]
         p_true = self._pull_back(p[None], p[None] - e[None, :2])[0]
         frame = take_frame(self.house, (p_true[0], p_true[1], pose[2] - e[2]), camera=self.camera,
-                           detector=self.detector, rng=self._rng_camera, model=model, layer_edges=layer_edges)
+                           detector=self.detector, rng=self._rng_camera, model=model, layer_edges=layer_edges,
+                           errors=self.detector_errors)
         g = self.house.grid
         c, s = np.cos(e[2]), np.sin(e[2])
         d = g.cell_to_world(frame.cells) - p_true
         cells = g.world_to_cell(p + np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=-1))
         keep = g.contains(cells)
-        return Frame(pose.copy(), cells[keep], None if frame.layers is None else frame.layers[keep],
-                     frame.distance[keep], frame.labels[keep], frame.likelihood[keep], frame.classes)
+        return replace(frame, pose=pose.copy(), cells=cells[keep],
+                       layers=None if frame.layers is None else frame.layers[keep], distance=frame.distance[keep],
+                       labels=frame.labels[keep], likelihood=frame.likelihood[keep],
+                       bearing=None if frame.bearing is None else frame.bearing[keep])
 
     def semantic_map(self, class_prior, *, room_table=None, room_names=None, layers: int | None = None) -> SemanticMap:
         """Initial class beliefs over the house in the detector's class order.

@@ -10,6 +10,8 @@ A world file names the files a GSL lab already has; relative paths resolve again
     ontology: ontology.yaml      # this project's format or the lab's (top-level Gases)
     room_classes: ObjectProbByRoom.yaml   # optional: the lab's p(o | room)
     gas: smoke                   # optional: target gas (default: the experiment's, else the ontology's first)
+    model: realistic             # optional: the world model, ideal (default) or realistic, or ideal+COMPONENT...
+                                 # (psgsl_pgm.sim.WorldModel: CFD wind, MOX sensor, occluding camera, pose error)
     source_region: rooms         # where a source may be: rooms (default), free, or a mask image (white = may)
     semantic_map: beliefs.npz    # optional: a mapper's class beliefs instead of the simulated camera
                                  # (.npy/.npz dense beliefs or Voxeland's instance-map JSON)
@@ -57,11 +59,12 @@ from ._objects import SceneObject, load_objects
 from ._resample import coarsen_factor, coarsen_labels, coarsen_occupancy
 from ._roommap import load_room_map
 from ._rosmap import load_ros_map
+from ._world_model import WorldModel
 
 __all__ = ["WorldSpec", "default_world", "default_world_path", "load_world", "navigable", "world_files"]
 
 _KEYS = ("map", "resolution", "rooms", "objects", "ontology", "room_classes", "gas", "source_region",
-         "semantic_map", "wind", "start", "sources", "builtin", "clearance", "other_classes")
+         "semantic_map", "wind", "start", "sources", "builtin", "clearance", "other_classes", "model")
 _WIND_POTENTIAL = ("speed", "perturbation", "windows")
 _WIND_GADEN = ("gaden_csv", "height", "period", "windows")
 _REGIONS = ("rooms", "free")
@@ -99,6 +102,8 @@ class WorldSpec:
         A mapper's class beliefs in the ontology's class order (``semantic_map``).
     windows : tuple of dict
         The declared windows (role, from, to, width), for summaries and figures.
+    model : str
+        The world model's name (:class:`WorldModel`): ``ideal`` unless the file says otherwise.
     """
 
     path: Path
@@ -115,6 +120,7 @@ class WorldSpec:
     clearance: float = 0.25
     object_classes: tuple = ()
     map_path: Path | None = None
+    model: str = "ideal"
     _notes: dict = field(default_factory=dict, repr=False)
 
     # --- the house ---------------------------------------------------------------------------------------
@@ -178,10 +184,15 @@ class WorldSpec:
         xy = np.asarray(spec, dtype=np.float64)
         return xy, object_at(house, xy)
 
-    def make_world(self, seed: int = 0, source="oven", *, warm_up: float = 60.0, **kwargs):
-        """The running simulation (:func:`psgsl_pgm.sim.make_world`) of this world for one seed and source."""
+    def make_world(self, seed: int = 0, source="oven", *, warm_up: float = 60.0, model=None, **kwargs):
+        """The running simulation (:func:`psgsl_pgm.sim.make_world`) of this world for one seed and source.
+
+        ``model`` (a :class:`WorldModel` or its name; default: the file's ``model``) chooses the world's parts;
+        parts given in ``kwargs`` win. A world whose wind is a GADEN CFD export keeps it under ``cfd-wind``.
+        """
         from ._world import make_world
 
+        wm = WorldModel.parse(self.model if model is None else model)
         house = self.house(seed)
         spec = self.source_spec(source)
         if self.fixed_house is not None or not isinstance(spec, str):
@@ -190,7 +201,10 @@ class WorldSpec:
             spec = obj if isinstance(spec, str) else xy  # a position stays where it is (make_world finds its object)
         if self.wind["kind"] == "gaden":
             kwargs.setdefault("wind", self.wind["sequence"])
-        else:
+            wm = WorldModel(tuple(c for c in wm.components if c != "cfd-wind"))  # the file's CFD is the CFD wind
+        for key, value in wm.world_kwargs(house, wind_speed=self.wind.get("speed", 0.2)).items():
+            kwargs.setdefault(key, value)
+        if "wind" not in kwargs:  # the potential flow (a given wind, GADEN's or the CFD's, leaves these unused)
             kwargs.setdefault("mean_speed", self.wind["speed"])
             kwargs.setdefault("perturbation", self.wind["perturbation"])
         return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
@@ -253,6 +267,7 @@ class WorldSpec:
             "ontology": {"classes": list(ont.classes), "gases": list(ont.gases), "rooms": list(ont.rooms),
                          "rooms_at_class_prior": no_rooms},
             "gas": self.gas,
+            "model": self.model,
             "semantic_map": None if self.class_beliefs is None else list(self.class_beliefs.shape),
         }
 
@@ -461,8 +476,13 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
         _check_rooms(where, "room_classes" if "room_classes" in data else "ontology", ontology.rooms, house,
                      data["rooms"])
 
+    model = data.get("model", "ideal")
+    try:
+        model = WorldModel.parse(model).name
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{where}: key 'model': {exc}") from None
     spec = WorldSpec(wpath, ontology, gas, wind, start, sources, region_value, beliefs, windows, house, builtin,
-                     clearance, object_classes, map_path)
+                     clearance, object_classes, map_path, model)
     _check_positions(where, spec, probe)
     return spec
 

@@ -45,3 +45,13 @@ def test_a_run_not_found_pairs_with_a_tour_still_searching(tmp_path):
     _run(runs, "space-aware-infotaxis", 0, [0, 995], [60, 4], [1, 1], found=False)
     m = _script().matched_tour(runs, "pmfs")[("oven", "space-aware-infotaxis/olfaction")]
     assert (m["n"], m["tour_area"], m["tour_coverage"]) == (1, 10.0, 1.0)
+
+
+def test_paired_lines_mark_exploratory_comparisons_and_flag_few_seeds():
+    v = {"rmst_difference": {"value": -12.4, "ci95": [-30.0, 4.0]}, "p_value": 0.21, "p_holm": 0.42, "n": 20,
+         "primary": False}
+    line = _script().paired_line("infotaxis/semantics - infotaxis/olfaction", v)
+    assert line.endswith("(n = 20) — exploratory") and "-12 s [-30, +4]" in line
+    assert _script().paired_line("a - b", dict(v, primary=True)).endswith("(n = 20) — **primary**")
+    few = _script().paired_line("a - b", dict(v, n=4))
+    assert few.endswith("— exploratory — fewer than 20 paired seeds: the interval is unreliable")

@@ -117,3 +117,39 @@ def test_a_relative_out_folder_gives_condition_worlds_that_load(tmp_path, monkey
     for w in worlds:
         load_world(w)  # every file it names exists
     assert len(list((tmp_path / "rel" / "runs").glob("*.npz"))) == 3
+
+
+@pytest.mark.parametrize("extra, needle", [
+    (["--split", "test", "--first-house", "0"], "--first-house does not apply with --split test"),
+    (["--split", "test", "--seeds", "21"], "at most 20"),
+    (["--split", "test", "--houses", "101"], "at most 100"),
+    (["--first-house", "9999"], "are the test split's"),
+])
+def test_a_split_with_explicit_homes_is_one_line_and_exit_2(tmp_path, capsys, extra, needle):
+    out = tmp_path / "b"
+    assert main(["benchmark", "--houses", "2", "--out", str(out), "--quiet"] + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("psgsl benchmark: error: ") and needle in err[0], err
+    assert not out.exists()
+
+
+def test_an_unknown_benchmark_split_exits_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["benchmark", "--split", "holdout", "--out", str(tmp_path / "b")])
+    assert exc.value.code == 2
+    assert "invalid choice: 'holdout'" in capsys.readouterr().err
+
+
+def test_the_test_split_runs_test_homes_and_seeds_and_records_it(tmp_path, capsys):
+    out = tmp_path / "b"
+    argv = ["benchmark", "--split", "test", "--houses", "1", "--seeds", "1", "--rooms", "3", "--area", "45",
+            "--policies", "tour", "--variants", "olfaction", "--conditions", "right-ontology", "--budget", "5",
+            "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv) == 0
+    assert "(test split), seeds 20000-20000" in capsys.readouterr().out
+    assert [p.name for p in (out / "runs").iterdir()] == [
+        "h10000__right-ontology__tour__olfaction__infotaxis__seed20000.npz"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["settings"]["split"] == "test" and summary["settings"]["houses"] == ["h10000"]
+    assert summary["settings"]["seeds"] == [20000]
+    assert "Split: **test**" in (out / "report.md").read_text()

@@ -120,3 +120,37 @@ def test_first_seed_runs_the_held_out_seeds_and_resumes(tmp_path):
     assert main(argv[:-2] + ["--first-seed", "8", "--seeds", "2", "--out", str(out)]) == 0  # 8 reused, 9 added
     assert {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir() if p.name in stamps} == stamps
     assert json.loads((out / "summary.json").read_text())["oven/infotaxis"]["tour/olfaction"]["seeds"] == [7, 8, 9]
+
+
+@pytest.mark.parametrize("extra, needle", [
+    (["--split", "test", "--first-seed", "0"], "--first-seed does not apply with --split test"),
+    (["--split", "test", "--seeds", "21"], "at most 20"),
+    (["--first-seed", "19999", "--seeds", "2"], "are the test split's"),
+])
+def test_a_split_with_explicit_seeds_is_one_line_and_exit_2(tmp_path, capsys, extra, needle):
+    out = tmp_path / "o"
+    assert main(["search", "--out", str(out), "--quiet"] + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("psgsl search: error: ") and needle in err[0], err
+    assert not out.exists()
+
+
+def test_an_unknown_split_exits_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["search", "--split", "holdout", "--out", str(tmp_path / "o")])
+    assert exc.value.code == 2
+    assert "invalid choice: 'holdout'" in capsys.readouterr().err
+
+
+def test_the_test_split_runs_its_own_seeds_and_says_so(tmp_path, capsys):
+    out = tmp_path / "s"
+    argv = ["search", "--sources", "oven", "--policies", "tour", "--variants", "olfaction", "--seeds", "2",
+            "--budget", "5", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv + ["--split", "test"]) == 0
+    assert "split test: seeds 20000-20001" in capsys.readouterr().out
+    s = json.loads((out / "summary.json").read_text())["oven/infotaxis"]["tour/olfaction"]
+    assert s["seeds"] == [20000, 20001] and s["split"] == "test"
+    dev = tmp_path / "d"
+    assert main(argv[:-1] + [str(dev)]) == 0  # no --split: dev, seeds 0 and 1 as before
+    s = json.loads((dev / "summary.json").read_text())["oven/infotaxis"]["tour/olfaction"]
+    assert s["seeds"] == [0, 1] and s["split"] == "dev"

@@ -10,7 +10,7 @@ from psgsl_pgm.experiment._config import PARAMETER_GRID
 from psgsl_pgm.experiment._robot_models import robot_detector_model, wind_basis
 from psgsl_pgm.experiment._run import walk
 from psgsl_pgm.experiment._tour import exploration_tour
-from psgsl_pgm.sim import HOUSE_CLASSES, DetectorModel, LocalisationError, make_world
+from psgsl_pgm.sim import HOUSE_CLASSES, Camera, DetectorModel, LocalisationError, make_world
 
 
 class _SimulatorOnlyWind:
@@ -47,6 +47,22 @@ def guard_true_pose(world, allow=None):
                             lambda self, v, k=key: self.__dict__.__setitem__(k, v))
     world.__class__ = type(f"TruePoseGuarded{cls.__name__}", (cls,), ns)
     return world
+
+
+class _SimulatorOnlyDetector:
+    """The world's detector: its label vocabulary (classes, labels, nothing) is public, every other attribute (the
+    confusion, the detection curve, the persistence, the distractors) readable only from psgsl_pgm.sim.*."""
+
+    VOCABULARY = ("classes", "labels", "nothing")
+
+    def __init__(self, detector):
+        object.__setattr__(self, "_detector", detector)
+
+    def __getattr__(self, name):
+        caller = sys._getframe(1).f_globals.get("__name__", "")
+        if name not in self.VOCABULARY and not caller.startswith("psgsl_pgm.sim"):
+            raise RuntimeError(f"{caller} read the simulator's detector parameters (.{name})")
+        return getattr(object.__getattribute__(self, "_detector"), name)
 
 
 @pytest.fixture(scope="module")
@@ -103,6 +119,31 @@ def test_no_robot_code_path_reads_the_true_pose(pose_guarded_world, estimator):
         beliefs.estimator.information_gain([stop])
         assert all(np.array_equal(f.pose[:2], stop) for f in frames)  # the frames carry the believed pose
     assert beliefs.wind.n_readings == 8
+
+
+def test_no_robot_code_path_reads_the_detector_parameters():
+    """A realistic camera and detector (furniture occlusion, range and bearing fall-off, persistent instance
+    labels, distractor sites) in the world, guarded: the experiment reads its frames with the detector model
+    counted on reference houses, and no code outside the simulator reads the world's detector parameters."""
+    world = make_world(seed=3, source="oven", warm_up=5.0, camera=Camera(occlusion="furniture"),
+                       detector=DetectorModel.realistic(HOUSE_CLASSES))
+    world.detector = _SimulatorOnlyDetector(world.detector)
+    with pytest.raises(RuntimeError, match="read the simulator's detector parameters"):
+        world.detector.confusion
+    config = ExperimentConfig(stops=6)
+    beliefs = VariantPosteriors(world, "pmfs", config)
+    robot = beliefs.detector_model
+    assert isinstance(robot, DetectorModel) and robot is robot_detector_model(HOUSE_CLASSES)
+    assert robot.half_range is None and robot.persistence == 0 and robot.distractors == 0  # its own model
+    tour = exploration_tour(world.house).first(6)
+    n_frames = 0
+    for _, stop, reading, wind, frames in walk(world, tour, config):
+        assert all(f.bearing is not None for f in frames)  # made by the realistic detector
+        beliefs.observe(stop, reading, wind, frames)
+        beliefs.posteriors()
+        n_frames += len(frames)
+    assert n_frames >= 6
+    assert np.isfinite(beliefs.maps["semantics"].probs).all()
 
 
 def test_wind_estimate_finds_the_through_flow_of_a_house():
@@ -219,3 +260,17 @@ def test_infotaxis_gets_the_parameter_grid_and_the_plume_solves_follow_the_wind(
         ExperimentConfig(parameter_grid=((0.01, 100.0, 0.5),))
     with pytest.raises(ValueError, match="non-negative weights"):
         ExperimentConfig(parameter_grid=((0.01, 100.0, 0.5, -1.0),))
+
+
+def test_the_robot_can_calibrate_on_reference_frames_of_a_realistic_detector():
+    """Counted on reference houses seen by a realistic camera and detector: the per-cell estimate absorbs the
+    cos⁴ bearing loss into its p_max (mean of cos⁴ over the ±35° opening ≈ 0.75, so p_max ≈ 0.9 · 0.75 near by)
+    and the distractor sites into its false-positive rate (above the realistic detector's 0.01 per cell)."""
+    robot = robot_detector_model(realistic=True)
+    assert isinstance(robot, DetectorModel) and robot is not robot_detector_model()
+    assert robot.half_range is None and robot.angle_power == 0 and not robot.correlated
+    beta = np.linspace(-np.deg2rad(35), np.deg2rad(35), 10_001)
+    assert robot.p_max == pytest.approx(0.9 * np.mean(np.cos(beta) ** 4), abs=0.05)
+    assert robot.false_positive > 0.01
+    with pytest.raises(TypeError, match="realistic must be True or False"):
+        robot_detector_model(realistic="yes")

@@ -97,3 +97,39 @@ def test_arms_share_the_runs_that_do_not_read_the_ontology():
 def test_unknown_condition_names_the_choices(world):
     with pytest.raises(ValueError, match="condition must be one of"):
         robot_ontology(world.ontology, "wrong", house=0)
+
+
+def test_wrong_ontology_moves_every_object_class_in_every_house():
+    from psgsl_pgm.core._ontology import Ontology
+    from psgsl_pgm.search._episodes import _derangement
+
+    classes = ("oven", "bed", "sofa", "sink", "toilet", "table", "chair", "fridge", OTHER)
+    table = np.arange(1.0, 10.0)[None, :] / 45.0  # distinct values: a class left in place keeps its own
+    ont = Ontology(classes, ("smoke",), table, np.full(9, 1 / 9))
+    for house in range(100):
+        wrong = robot_ontology(ont, "wrong-ontology", house=house).source_table[0]
+        assert wrong[-1] == table[0, -1]  # other keeps its own
+        assert not np.any(wrong[:-1] == table[0, :-1]), (house, wrong)  # no object class keeps its probability
+        assert sorted(wrong[:-1]) == sorted(table[0, :-1])
+    rng = np.random.default_rng(0)
+    for n in (2, 3, 5, 8):
+        for _ in range(200):
+            perm = _derangement(rng, n)
+            assert sorted(perm) == list(range(n)) and not np.any(perm == np.arange(n))
+
+
+def test_source_instances_are_drawn_uniformly_within_a_class(world, sources):
+    by_class = {}
+    for o in sources["objects"]:
+        by_class.setdefault(o.class_name, []).append(o.name)
+    many = {c: names for c, names in by_class.items() if len(names) > 1 and c != OTHER}
+    assert many, "the test house must hold a class with several instances"
+    n = 6000
+    draws = [draw_episode(world, 4, s, gases=("smoke",), off_rate=0.0, sources=sources) for s in range(n)]
+    for cls, names in many.items():
+        got = [d["object"] for d in draws if d["class"] == cls]
+        counts = np.array([got.count(name) for name in names])
+        m, k = len(got), len(names)
+        assert m >= 20, (cls, m)
+        sd = np.sqrt(m * (1 / k) * (1 - 1 / k))
+        assert np.all(np.abs(counts - m / k) <= 4 * sd), dict(zip(names, counts))

@@ -193,3 +193,31 @@ def test_bad_types():
         generate_house(0, room_types="Kitchen")
     with pytest.raises(TypeError, match="n_rooms"):
         generate_house(0, n_rooms=True)
+
+
+def test_drawn_area_has_the_per_room_floor(monkeypatch):
+    """The area a home is drawn with is uniform in [max(40, 14 n), 200] m² for n rooms (the floor plan is not built:
+    the draw is caught at the plan's call)."""
+    from scipy import stats
+
+    from psgsl_pgm.sim import _generate
+    from psgsl_pgm.sim._generate import AREA_PER_ROOM
+
+    seen = []
+
+    class Drawn(Exception):
+        pass
+
+    def catch(rng, area, room_types):
+        seen.append((len(room_types), area))
+        raise Drawn
+
+    monkeypatch.setattr(_generate, "draw_plan", catch)
+    for seed in range(300):
+        with pytest.raises(Drawn):
+            generate_house(seed, n_rooms=8 if seed % 2 else None)
+    lows = np.array([max(AREA_RANGE[0], AREA_PER_ROOM * n) for n, _ in seen])
+    areas = np.array([a for _, a in seen])
+    assert np.all(areas >= lows) and np.all(areas <= AREA_RANGE[1])
+    u = (areas - lows) / (AREA_RANGE[1] - lows)
+    assert stats.kstest(u, "uniform").pvalue > 1e-3
