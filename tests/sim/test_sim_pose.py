@@ -211,3 +211,18 @@ def test_a_true_position_never_lies_in_a_wall():
     along = true - pts[None]
     cross = along[..., 0] * -e[..., 1] - along[..., 1] * -e[..., 0]
     assert np.abs(cross[moved]).max() < 1e-9
+
+
+def test_the_pose_component_of_a_world_model_and_a_realistic_camera():
+    """``model="ideal+pose"`` gives the world the default error; with the occluding camera and the realistic
+    detector as well, a frame placed from the believed pose keeps one bearing and one distance per cell."""
+    from psgsl_pgm.sim import default_world
+
+    w = default_world().make_world(4, "oven", warm_up=5.0, model="ideal+pose")
+    assert w.localisation == LocalisationError()
+    assert default_world().make_world(4, "oven", warm_up=5.0).localisation is None
+    w = default_world().make_world(4, "oven", warm_up=5.0, model="ideal+camera+pose")
+    f = w.camera_frame((3.0, 6.0, 0.3))
+    assert f.bearing is not None and len(f.cells) > 50
+    assert len(f.bearing) == len(f.distance) == len(f.labels) == len(f.likelihood) == len(f.cells)
+    np.testing.assert_array_equal(f.pose, (3.0, 6.0, 0.3))
