@@ -15,8 +15,11 @@ Smagorinsky subgrid model, on the house's own grid (one lattice node per map cel
 Units. With the map resolution Δx (m) and the nominal inlet speed U (m/s), the inlet's lattice speed is
 :data:`U_LATTICE` = 0.04, so the time step is Δt = 0.04 Δx / U (0.02 s for 0.1 m cells at 0.2 m/s) and the
 inlet's Mach number stays u / c_s ≤ 0.04 · 1.8 · √3 ≈ 0.12 at the strongest gust (c_s = 1/√3; gusts are capped at
-1.8 U); jets through doors and past furniture are faster, and a lattice speed above 0.4 anywhere (Mach 0.7)
-stops the run with a ValueError. A lattice velocity u_lb is u_lb · Δx / Δt m/s.
+1.8 U); jets through doors and past furniture are faster (over 600 s the fastest cell reached 0.76 m/s, lattice
+0.15, in the default house and 1.25 m/s, lattice 0.25, beside the outlet window of ``generate_house(1)``), and a
+lattice speed above 0.4 anywhere (Mach 0.7) stops the run with a ValueError. A window N cells wide lets in
+U (1 − 1/(3N)) on average, not U: its two end cells lose their diagonal links to the wall (measured in the
+channel-flow test). A lattice velocity u_lb is u_lb · Δx / Δt m/s.
 
 Viscosity and turbulence. Air's kinematic viscosity (1.5e-5 m²/s) at Δx = 0.1 m would put the BGK relaxation
 time at τ = 0.5 + 3ν Δt/Δx² ≈ 0.50001, where the scheme is unstable: the flow is under-resolved, as any
@@ -171,7 +174,7 @@ def _gust(n: int, *, rng: np.random.Generator, intensity: float, angle_deg: floa
 def _simulate(obstacle: np.ndarray, inlet: np.ndarray, outlet: np.ndarray, *, resolution: float, speed: float,
               times: np.ndarray, spin_up: float, gust_intensity: float, gust_angle: float, seed: int,
               omega0: float = OMEGA0, smagorinsky: float = SMAGORINSKY) -> np.ndarray:
-    """Run the lattice and return (n, H, W, 2) cell velocities (m/s) at ``times`` (s after the spin-up).
+    """Run the lattice and return (n, H, W, 2) float32 cell velocities (m/s) at ``times`` (s after the spin-up).
 
     The one set-up of the solver: :func:`cfd_wind` and the channel-flow validation both come through here.
     ``obstacle``, ``inlet`` and ``outlet`` are disjoint (H, W) masks in the map's (row = y, col = x) layout; the
@@ -225,7 +228,7 @@ def _simulate(obstacle: np.ndarray, inlet: np.ndarray, outlet: np.ndarray, *, re
         u_in[..., 0] = U_LATTICE * g[i] * (c * n_x - s * n_y)
         u_in[..., 1] = U_LATTICE * g[i] * (s * n_x + c * n_y)
 
-    out = np.empty((len(targets), h, w, 2))
+    out = np.empty((len(targets), h, w, 2), dtype=np.float32)
     # window cells take the velocity of the nearest fluid cell
     _, (ri, ci) = ndi.distance_transform_edt(~fluid, return_indices=True)
     windows = inlet | outlet
@@ -328,10 +331,9 @@ def cfd_wind(house, *, speed: float = 0.2, duration: float = 600.0, seed: int = 
     if vel is None:
         vel = _simulate(obstacle, house.inlet, house.outlet, resolution=house.grid.resolution, speed=speed,
                         times=np.arange(n) * snapshot_period, spin_up=SPIN_UP, gust_intensity=GUST_INTENSITY,
-                        gust_angle=GUST_ANGLE, seed=int(seed)).astype(np.float32)
+                        gust_angle=GUST_ANGLE, seed=int(seed))
         _store(path, vel)
-    vel = vel.astype(np.float64)
-    return WindSequence(tuple(WindField(house.grid, v) for v in vel), snapshot_period)
+    return WindSequence(tuple(WindField(house.grid, v) for v in vel), snapshot_period)  # float64 per snapshot
 
 
 def _load(path: Path, shape) -> np.ndarray | None:
