@@ -117,10 +117,8 @@ def cfd_obstacles(house: House, *, height: float = SENSOR_HEIGHT) -> np.ndarray:
     >>> from psgsl_pgm.sim import default_house
     >>> h = default_house()
     >>> m = cfd_obstacles(h)
-    >>> bool(m[h.grid.world_to_cell((3.0, 10.5))[0], h.grid.world_to_cell((3.0, 10.5))[1]])  # the bed
-    True
-    >>> bool(m[h.grid.world_to_cell((7.7, 2.7))[0], h.grid.world_to_cell((7.7, 2.7))[1]])  # under the table
-    False
+    >>> [bool(m[tuple(h.grid.world_to_cell(xy))]) for xy in [(3.0, 10.5), (7.7, 2.7)]]  # a bed; under the table
+    [True, False]
     """
     if not isinstance(house, House):
         raise TypeError(f"house must be a House, got {type(house).__name__}")
@@ -180,7 +178,7 @@ def _simulate(obstacle: np.ndarray, inlet: np.ndarray, outlet: np.ndarray, *, re
     ``obstacle``, ``inlet`` and ``outlet`` are disjoint (H, W) masks in the map's (row = y, col = x) layout; the
     border of the map is a wall outside them.
     """
-    lbmpy, ps = _lbmpy()
+    _lbmpy()
     from lbmpy import LBMConfig, LBStencil, Method, Stencil, SubgridScaleModel
     from lbmpy.boundaries import UBB, FixedDensity, NoSlip
     from lbmpy.lbstep import LatticeBoltzmannStep

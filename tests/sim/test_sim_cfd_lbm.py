@@ -8,8 +8,8 @@ import pytest
 
 pytest.importorskip("lbmpy")
 
-from psgsl_pgm.sim import (GridMap, House, WindSequence, cfd_wind, default_house, make_world,  # noqa: E402
-                           read_gaden_wind_csv, read_gaden_wind_snapshots, write_gaden_wind_csv)
+from psgsl_pgm.sim import (GridMap, House, WindSequence, cfd_wind, default_house, generate_house,  # noqa: E402
+                           make_world, read_gaden_wind_csv, read_gaden_wind_snapshots, write_gaden_wind_csv)
 from psgsl_pgm.sim import _lbm  # noqa: E402
 
 
@@ -157,3 +157,18 @@ def test_a_window_sealed_by_walls_is_refused(tmp_path):
     sealed = House(GridMap(occ, 0.1), house.room_labels, (), (), house.inlet, house.outlet, classes=("other",))
     with pytest.raises(ValueError, match="inlet window .* touches no free cell"):
         cfd_wind(sealed, duration=2.0, cache_dir=tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1])
+def test_generated_home_ten_minutes_of_wind_carry_the_gas(seed, tmp_path):
+    """The default duration on generated homes (10-20 s each on one core once pystencils' kernels are compiled):
+    no divergence, the lattice's Mach limit kept, and a world runs on it."""
+    house = generate_house(seed).house
+    wind = cfd_wind(house, cache_dir=tmp_path)
+    assert len(wind.snapshots) == 600
+    speed = np.hypot(wind.velocities[..., 0], wind.velocities[..., 1])
+    assert np.isfinite(speed).all() and speed.max() < _lbm._MAX_LATTICE_SPEED * 0.2 / _lbm.U_LATTICE
+    source = house.objects[0].class_name
+    world = make_world(house, source=source, wind=wind, warm_up=60.0, seed=seed)
+    assert world.gas.n_filaments > 100
