@@ -32,8 +32,9 @@ Buildings 28:137) zero-equation model gives ν_t = 0.03874 V l ≈ 8e-3 m²/s at
 The Reynolds number of a 1 m door is then U·1 m/ν0 ≈ 90: jets through doors and windows separate and shed
 eddies, so the flow is unsteady even without gusts.
 
-Gust. The inlet speed factor g and the inflow angle θ (from the inward normal) follow AR(1) processes updated
-every :data:`GUST_STEP` s, with correlation time :data:`GUST_TIME` = 20 s, a speed standard deviation of
+Gust. The inlet speed factor g and the inflow angle θ (from the inward normal) follow AR(1) processes with a
+value every :data:`GUST_STEP` s, interpolated linearly in between (the inlet is set 5 times a second, so its
+speed has no steps that would ring through the lattice as pressure waves), with correlation time :data:`GUST_TIME` = 20 s, a speed standard deviation of
 :data:`GUST_INTENSITY` = 0.2 (the turbulence intensity of wind near buildings, 0.1-0.3 in Stull 1988, "An
 Introduction to Boundary Layer Meteorology", Sec. 1.4.3) and an angle standard deviation of
 :data:`GUST_ANGLE` = 10° (a window frame straightens the inflow); g is clipped to [0.3, 1.8].
@@ -85,6 +86,7 @@ GUST_TIME = 20.0
 GUST_INTENSITY = 0.2
 GUST_ANGLE = 10.0
 _GUST_CLIP = (0.3, 1.8)
+_GUST_SUBSTEPS = 5  # inlet updates per knot interval, interpolating linearly
 _MAX_LATTICE_SPEED = 0.4  # beyond Mach ~0.7 the lattice is no longer a model of incompressible flow
 _SCHEME = "psgsl-lbm-d2q9-srt-smagorinsky-1"  # bump when the set-up changes what is computed
 
@@ -221,30 +223,33 @@ def _simulate(obstacle: np.ndarray, inlet: np.ndarray, outlet: np.ndarray, *, re
     g, th = _gust(n_gust, rng=rng, intensity=gust_intensity, angle_deg=gust_angle,
                   rho=float(np.exp(-gust_steps * dt / GUST_TIME)))
 
-    def set_inlet(i):
-        c, s = np.cos(th[i]), np.sin(th[i])
-        u_in[..., 0] = U_LATTICE * g[i] * (c * n_x - s * n_y)
-        u_in[..., 1] = U_LATTICE * g[i] * (s * n_x + c * n_y)
+    def set_inlet(i, frac):  # the gust between knots i and i + 1, linearly
+        gain = U_LATTICE * ((1 - frac) * g[i] + frac * g[i + 1])
+        angle = (1 - frac) * th[i] + frac * th[i + 1]
+        c, s = np.cos(angle), np.sin(angle)
+        u_in[..., 0] = gain * (c * n_x - s * n_y)
+        u_in[..., 1] = gain * (s * n_x + c * n_y)
 
     out = np.empty((len(targets), h, w, 2), dtype=np.float32)
     # window cells take the velocity of the nearest fluid cell
     _, (ri, ci) = ndi.distance_transform_edt(~fluid, return_indices=True)
     windows = inlet | outlet
+    sub = max(1, gust_steps // _GUST_SUBSTEPS)  # inlet updates between knots: no step in the inlet speed
     now = 0
     k = 0
     while k < len(targets):
-        gi = now // gust_steps
-        set_inlet(gi)
-        stop = min((gi + 1) * gust_steps, int(targets[k]))
+        stop = min((now // sub + 1) * sub, int(targets[k]))
         if stop > now:
+            set_inlet(now // gust_steps, ((now + stop) / 2 % gust_steps) / gust_steps)
             step.run(stop - now)
             now = stop
-            u = np.asarray(step.velocity_slice(masked=False))[fluid.T]  # obstacle cells hold no velocity
-            peak = float(np.max(np.abs(u))) if np.isfinite(u).all() else np.inf
-            if not peak <= _MAX_LATTICE_SPEED:
-                raise ValueError(f"the lattice Boltzmann wind diverged at t = {now * dt - spin_up:.1f} s (lattice "
-                                 f"speed {peak:.3g} > {_MAX_LATTICE_SPEED}); the openings are too narrow for the grid: "
-                                 "resample the house to a finer grid")
+            if now % gust_steps == 0 or now == targets[k]:
+                u = np.asarray(step.velocity_slice(masked=False))[fluid.T]  # obstacle cells hold no velocity
+                peak = float(np.max(np.abs(u))) if np.isfinite(u).all() else np.inf
+                if not peak <= _MAX_LATTICE_SPEED:
+                    raise ValueError(f"the lattice Boltzmann wind diverged at t = {now * dt - spin_up:.1f} s (lattice "
+                                     f"speed {peak:.3g} > {_MAX_LATTICE_SPEED}); the openings are too narrow for the "
+                                     "grid: resample the house to a finer grid")
         while k < len(targets) and targets[k] == now:
             raw = np.transpose(np.asarray(step.velocity_slice(masked=False)), (1, 0, 2))
             vel = np.zeros((h, w, 2))
@@ -262,7 +267,7 @@ def _content_key(obstacle, inlet, outlet, grid: GridMap, **params) -> str:
     meta = dict(params, scheme=_SCHEME, shape=list(grid.shape), resolution=float(grid.resolution),
                 origin=[float(v) for v in grid.origin], sensor_height=SENSOR_HEIGHT, u_lattice=U_LATTICE,
                 omega0=OMEGA0, smagorinsky=SMAGORINSKY, spin_up=SPIN_UP,
-                gust=[GUST_STEP, GUST_TIME, GUST_INTENSITY, GUST_ANGLE, list(_GUST_CLIP)],
+                gust=[GUST_STEP, GUST_TIME, GUST_INTENSITY, GUST_ANGLE, list(_GUST_CLIP), _GUST_SUBSTEPS],
                 lbmpy=lbmpy.__version__, pystencils=ps.__version__)
     hsh.update(json.dumps(meta, sort_keys=True).encode())
     for m in (obstacle, inlet, outlet):
