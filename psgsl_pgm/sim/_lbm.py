@@ -34,10 +34,10 @@ eddies, so the flow is unsteady even without gusts.
 
 Gust. The inlet speed factor g and the inflow angle θ (from the inward normal) follow AR(1) processes with a
 value every :data:`GUST_STEP` s, interpolated linearly in between (the inlet is set 5 times a second, so its
-speed has no steps that would ring through the lattice as pressure waves), with correlation time :data:`GUST_TIME` = 20 s, a speed standard deviation of
-:data:`GUST_INTENSITY` = 0.2 (the turbulence intensity of wind near buildings, 0.1-0.3 in Stull 1988, "An
-Introduction to Boundary Layer Meteorology", Sec. 1.4.3) and an angle standard deviation of
-:data:`GUST_ANGLE` = 10° (a window frame straightens the inflow); g is clipped to [0.3, 1.8].
+speed has no steps), with correlation time :data:`GUST_TIME` = 20 s, a speed standard deviation of
+:data:`GUST_INTENSITY` = 0.2 (turbulence intensities of the atmospheric surface layer are 0.1-0.3; Stull 1988,
+"An Introduction to Boundary Layer Meteorology", Kluwer) and an angle standard deviation of :data:`GUST_ANGLE`
+= 10° (a window frame straightens the inflow); g is clipped to [0.3, 1.8].
 
 The flow starts at rest and runs :data:`SPIN_UP` = 120 s (about one flow-through of a house at 0.2 m/s) before the
 first snapshot. Each snapshot is the instantaneous cell velocity; window cells take the velocity of the nearest
