@@ -16,7 +16,7 @@ Units. With the map resolution Δx (m) and the nominal inlet speed U (m/s), the 
 :data:`U_LATTICE` = 0.04, so the time step is Δt = 0.04 Δx / U (0.02 s for 0.1 m cells at 0.2 m/s) and the
 inlet's Mach number stays u / c_s ≤ 0.04 · 1.8 · √3 ≈ 0.12 at the strongest gust (c_s = 1/√3; gusts are capped at
 1.8 U); jets through doors and past furniture are faster (over 600 s the fastest cell reached 0.76 m/s, lattice
-0.15, in the default house and 1.25 m/s, lattice 0.25, beside the outlet window of ``generate_house(1)``), and a
+0.15, in the default house and 1.14 m/s, lattice 0.23, beside the outlet window of ``generate_house(1)``), and a
 lattice speed above 0.4 anywhere (Mach 0.7) stops the run with a ValueError. A window N cells wide lets in
 U (1 − 1/(3N)) on average, not U: its two end cells lose their diagonal links to the wall (measured in the
 channel-flow test). A lattice velocity u_lb is u_lb · Δx / Δt m/s.
