@@ -101,6 +101,15 @@ def _lbmpy():
     return lbmpy, pystencils
 
 
+def _check_compiler() -> None:
+    """pystencils compiles lbmpy's kernels with the system's C compiler; without one it fails with an IndexError."""
+    from pystencils.jit.cpu.compiler_info import CompilerInfo
+
+    if not CompilerInfo.get_available_compilers():
+        raise ImportError("the CFD wind compiles lbmpy's kernels with a C compiler and none was found: install gcc "
+                          "(apt-get install gcc)")
+
+
 def default_cache_dir() -> Path:
     """The CFD wind cache: ``psgsl_pgm/cfd_wind`` in the user cache folder, beside numba's (``~/.cache`` on Linux)."""
     from numba.misc.appdirs import AppDirs
@@ -181,6 +190,7 @@ def _simulate(obstacle: np.ndarray, inlet: np.ndarray, outlet: np.ndarray, *, re
     border of the map is a wall outside them.
     """
     _lbmpy()
+    _check_compiler()
     from lbmpy import LBMConfig, LBStencil, Method, Stencil, SubgridScaleModel
     from lbmpy.boundaries import UBB, FixedDensity, NoSlip
     from lbmpy.lbstep import LatticeBoltzmannStep
@@ -309,7 +319,7 @@ def cfd_wind(house, *, speed: float = 0.2, duration: float = 600.0, seed: int = 
     Raises
     ------
     ImportError
-        lbmpy is not installed (the ``cfd`` extra).
+        lbmpy is not installed (the ``cfd`` extra), or there is no C compiler (gcc) to build its kernels.
     ValueError
         Bad arguments, a window that no air can pass, or a flow that diverged.
     """

@@ -128,6 +128,16 @@ def test_missing_lbmpy_is_one_line_naming_the_extra(monkeypatch, tmp_path):
     assert str(info.value) == 'the CFD wind needs lbmpy: pip install "psgsl-pgm[cfd]"'
 
 
+def test_no_c_compiler_is_one_line_naming_it(monkeypatch, tmp_path):
+    from pystencils.jit.cpu.compiler_info import CompilerInfo
+
+    monkeypatch.setattr(CompilerInfo, "get_available_compilers", staticmethod(lambda: ()))
+    with pytest.raises(ImportError, match=r"C compiler .* install gcc") as info:
+        cfd_wind(_channel(4, 20, 0.1), duration=2.0, cache_dir=tmp_path)
+    assert "\n" not in str(info.value)
+    assert not list(tmp_path.glob("*"))
+
+
 def test_a_diverging_flow_is_a_value_error_saying_what_to_change(monkeypatch, tmp_path):
     monkeypatch.setattr(_lbm, "_MAX_LATTICE_SPEED", 1e-6)  # every real flow exceeds it: the guard must fire
     with pytest.raises(ValueError, match="diverged.*resample the house to a finer grid") as info:
