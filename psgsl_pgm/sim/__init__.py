@@ -5,7 +5,9 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
 * environments — :class:`GridMap` (the core's ``psgsl_pgm.GridMap``), ROS ``map_server`` maps (:func:`load_ros_map`), room-category maps
   (:func:`load_room_map`), object lists (:func:`load_objects`), and the embedded :func:`default_house`;
 * wind — potential flow between inlet and outlet windows with a slow divergence-free perturbation
-  (:func:`potential_flow`, :func:`make_wind`), or a GADEN CFD export (:func:`read_gaden_wind_csv`);
+  (:func:`potential_flow`, :func:`make_wind`), a GADEN CFD export (:func:`read_gaden_wind_csv`, written by
+  :func:`write_gaden_wind_csv`), or time-resolved lattice Boltzmann CFD through the house (:func:`cfd_wind`, the
+  ``cfd`` extra);
 * gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensor and anemometer models;
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
@@ -27,13 +29,14 @@ camera pass over it, but the robot must avoid it (:attr:`House.robot_obstacles`)
 from ..geometry._grid import GridMap  # the core's grid (psgsl_pgm.GridMap), re-exported for simulator users
 from ..geometry._sight import LineOfSightCache, cells_clear  # the core's one line-of-sight rule
 from ._camera import OCCLUSIONS, Camera, Frame, take_frame
-from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots
+from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots, write_gaden_wind_csv
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
 from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorErrors, DetectorModel
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._generate import AREA_RANGE, ROOM_RANGE, GeneratedHouse, generate_house
 from ._generated_ontology import GENERATOR_REFERENCE_SEEDS, generated_ontology
 from ._house import House, default_house, segment_mask
+from ._lbm import cfd_wind
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
 from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
 from ._pose import LocalisationError
@@ -80,6 +83,7 @@ __all__ = [
     "WorldModel",
     "WorldSpec",
     "box_footprint",
+    "cfd_wind",
     "cells_clear",
     "default_house",
     "default_world",
@@ -107,4 +111,5 @@ __all__ = [
     "save_room_map",
     "segment_mask",
     "take_frame",
+    "write_gaden_wind_csv",
 ]

@@ -5,12 +5,14 @@ among them ``"U:0","U:1","U:2"`` (velocity, m/s) and ``"Points:0","Points:1","Po
 any order and possibly with others (``"p"``, ``"k"``, ...). ParaView versions differ in whether the header
 carries units: ``"U:0"`` and ``"U [m/s]:0"`` (``"Points [m]:0"``) are the same column here. Here the points
 within a horizontal slab around a height are kept and every free cell of the grid takes the (u, v) of the nearest
-of them. Several files are time snapshots (:func:`read_gaden_wind_snapshots`).
+of them. Several files are time snapshots (:func:`read_gaden_wind_snapshots`). :func:`write_gaden_wind_csv` writes
+a wind field or sequence in the same form (one row per free cell centre), which these readers load back.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import re
 from pathlib import Path
 
@@ -20,7 +22,7 @@ from scipy.spatial import cKDTree
 from ..geometry._grid import GridMap
 from ._wind import WindField, WindSequence
 
-__all__ = ["read_gaden_wind_csv", "read_gaden_wind_snapshots"]
+__all__ = ["read_gaden_wind_csv", "read_gaden_wind_snapshots", "write_gaden_wind_csv"]
 
 _COLUMNS = ("U:0", "U:1", "U:2", "Points:0", "Points:1", "Points:2")
 
@@ -154,3 +156,55 @@ def _is_float(s: str) -> bool:
         return True
     except ValueError:
         return False
+
+
+def write_gaden_wind_csv(path, wind, *, height: float) -> list:
+    """Write wind in GADEN's CSV form: one row per free cell centre at ``height``, columns ``U:0..2``, ``Points:0..2``.
+
+    Parameters
+    ----------
+    path : str or Path
+        For a :class:`WindField`, the file to write. For a :class:`WindSequence`, the file name prefix as in
+        GADEN's ``wind_files`` setting: snapshot ``k`` goes to ``<path>_<k>.csv`` (GADEN's numbering from 0).
+    wind : WindField or WindSequence
+    height : float, keyword-only
+        z of every point (the slice's height), metres; ``U:2`` is 0.
+
+    Returns
+    -------
+    list of Path
+        The files written, in snapshot order. Each is written atomically (a temporary file, then a rename).
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> g = GridMap(np.zeros((2, 3), bool), 0.5)
+    >>> f = WindField(g, np.ones((2, 3, 2)))
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     [p] = write_gaden_wind_csv(Path(d) / "w.csv", f, height=0.3)
+    ...     back = read_gaden_wind_csv(p, like=g, height=0.3)
+    >>> bool(np.array_equal(back.velocity, f.velocity))
+    True
+    """
+    from ..io._output import write_file_atomically
+
+    if not np.isfinite(height):
+        raise ValueError(f"height must be a finite number of metres, got {height!r}")
+    if isinstance(wind, WindField):
+        fields, paths = [wind], [Path(path)]
+    elif isinstance(wind, WindSequence):
+        fields = list(wind.snapshots)
+        paths = [Path(f"{path}_{k}.csv") for k in range(len(fields))]
+    else:
+        raise TypeError(f"wind must be a WindField or WindSequence, got {type(wind).__name__}")
+    for field, p in zip(fields, paths):
+        g = field.grid
+        xy = g.cell_centres()[g.free]
+        uv = field.velocity[g.free]
+        table = np.column_stack([uv, np.zeros(len(uv)), xy, np.full(len(uv), float(height))])
+        text = io.StringIO()
+        text.write(",".join(f'"{c}"' for c in _COLUMNS) + "\n")
+        np.savetxt(text, table, delimiter=",", fmt="%.17g")
+        data = text.getvalue().encode()
+        write_file_atomically(p, lambda fh, data=data: fh.write(data), option="path")
+    return paths
