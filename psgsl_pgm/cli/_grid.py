@@ -120,9 +120,11 @@ def world_model(text):
     from ..sim._world_model import WorldModel
 
     try:
-        return WorldModel.parse(text).name
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"--world-model: {exc}") from None
+        model = WorldModel.parse(text)
+        model.check_available()  # a missing solver: one line, before any output
+    except (ValueError, TypeError, ImportError) as exc:
+        raise ValueError(f"--world-model {text}: {exc}") from None
+    return model.name
 
 
 def seed_count(text):

@@ -52,6 +52,7 @@ plumes (an oven's), none of which a slice holds.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
@@ -340,13 +341,35 @@ def cfd_wind(house, *, speed: float = 0.2, duration: float = 600.0, seed: int = 
                        seed=int(seed), snapshot_period=snapshot_period)
     folder = default_cache_dir() if cache_dir is None else Path(cache_dir)
     path = folder / f"{key}.npz"
-    vel = _load(path, (n,) + house.grid.shape + (2,))
-    if vel is None:
-        vel = _simulate(obstacle, house.inlet, house.outlet, resolution=house.grid.resolution, speed=speed,
-                        times=np.arange(n) * snapshot_period, spin_up=SPIN_UP, gust_intensity=GUST_INTENSITY,
-                        gust_angle=GUST_ANGLE, seed=int(seed))
-        _store(path, vel)
+    with _solving(path):  # one process solves a house; the others wait for its cache entry
+        vel = _load(path, (n,) + house.grid.shape + (2,))
+        if vel is None:
+            vel = _simulate(obstacle, house.inlet, house.outlet, resolution=house.grid.resolution, speed=speed,
+                            times=np.arange(n) * snapshot_period, spin_up=SPIN_UP, gust_intensity=GUST_INTENSITY,
+                            gust_angle=GUST_ANGLE, seed=int(seed))
+            _store(path, vel)
     return WindSequence(tuple(WindField(house.grid, v) for v in vel), snapshot_period)  # float64 per snapshot
+
+
+@contextlib.contextmanager
+def _solving(path: Path):
+    """Hold an exclusive lock on the cache entry's lock file while it is read or solved, so that the workers of a
+    grid that need the same house solve it once (the others then load it); without a writable cache folder or
+    ``fcntl``, no lock."""
+    try:
+        import fcntl
+
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(path.with_suffix(".lock"), "a")
+    except (ImportError, OSError):
+        yield
+        return
+    with fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _load(path: Path, shape) -> np.ndarray | None:

@@ -110,6 +110,15 @@ class WorldModel:
     def __contains__(self, component) -> bool:
         return component in self.components
 
+    def check_available(self) -> None:
+        """Raise :class:`ImportError` (one line: what to install) when a component's solver is missing: the CFD
+        wind needs lbmpy (the ``cfd`` extra) and a C compiler. A command checks this before it writes anything."""
+        if "cfd-wind" in self:
+            from ._lbm import _check_compiler, _lbmpy
+
+            _lbmpy()
+            _check_compiler()
+
     def world_kwargs(self, house, *, wind_speed: float = 0.2, cfd_cache=None) -> dict:
         """Keyword arguments of :func:`psgsl_pgm.sim.make_world` that build this model's parts for ``house``.
 

@@ -82,4 +82,23 @@ def test_cli_refuses_a_bad_world_model_in_one_line(command, tmp_path, capsys):
     code = main(command + ["--world-model", "ideal+wind", "--out", str(out), "--quiet"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "--world-model" in err[0] and "cfd-wind" in err[0]
-    assert not (out / "runs").exists() or not any((out / "runs").iterdir())  # nothing half-written
+    assert not out.exists()  # nothing written
+
+
+def test_cli_names_the_missing_solver_in_one_line(monkeypatch, tmp_path, capsys):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_lbmpy(name, *args, **kwargs):
+        if name.split(".")[0] == "lbmpy":
+            raise ImportError("No module named 'lbmpy'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_lbmpy)
+    out = tmp_path / "out"
+    code = main(["search", "--seeds", "1", "--world-model", "realistic", "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and 'pip install "psgsl-pgm[cfd]"' in err[0]
+    assert not out.exists()
+    assert WorldModel.parse("ideal+mox+camera+pose").check_available() is None  # no solver without the CFD wind
