@@ -12,6 +12,11 @@ detector model estimated on reference houses.
   (:meth:`psgsl_pgm.sim.DetectorModel.from_counts`: Dirichlet-smoothed confusion, false-positive rate, and the
   maximum-likelihood detection curve). The evaluation's frames are then *read* with this estimate, while they
   are *made* by the simulator's detector.
+* **Gas hits.** The robot knows which kind of gas sensor it carries, not its parameters: the ideal
+  :class:`psgsl_pgm.sim.GasSensor` reports a calibrated, thresholded reading whose hit is used as it is; for a
+  metal-oxide sensor the robot thresholds the rate of rise, for a photo-ionisation detector the
+  baseline-subtracted level (:class:`psgsl_pgm.olfaction.HitRule`, noise and baseline estimated online from its
+  own readings).
 """
 
 from __future__ import annotations
@@ -20,12 +25,13 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..sim import HOUSE_CLASSES, Camera, DetectorModel, default_house, potential_flow, take_frame
+from ..olfaction import HitRule
+from ..sim import HOUSE_CLASSES, Camera, DetectorModel, MOXSensor, PIDSensor, default_house, potential_flow, take_frame
 from ..sim._classes import OTHER, match_names
 from ..sim._house_ontology import REFERENCE_SEEDS
 from ._tour import exploration_tour
 
-__all__ = ["robot_detector_model", "wind_basis"]
+__all__ = ["robot_detector_model", "robot_hit_rule", "wind_basis"]
 
 _STOP_STRIDE = 3  # frames at every third stop of each reference tour (~10^6 labelled cells over ten houses)
 
@@ -44,6 +50,21 @@ def wind_basis(house) -> np.ndarray:
     basis[0, ..., 0] = grid.free
     basis[1, ..., 1] = grid.free
     return basis
+
+
+def robot_hit_rule(sensor) -> HitRule | None:
+    """The robot's hit rule for a gas sensor of ``sensor``'s kind (its class only; no attribute is read).
+
+    None for a sensor that decides its own hits (:class:`psgsl_pgm.sim.GasSensor`: a calibrated ppm reading and
+    its threshold, used unchanged); a fresh :class:`psgsl_pgm.olfaction.HitRule` — ``"rise"`` for a
+    :class:`psgsl_pgm.sim.MOXSensor`, ``"level"`` for a :class:`psgsl_pgm.sim.PIDSensor` — per run otherwise.
+    """
+    kind = type(sensor)
+    if issubclass(kind, MOXSensor):
+        return HitRule("rise")
+    if issubclass(kind, PIDSensor):
+        return HitRule("level")
+    return None
 
 
 @lru_cache(maxsize=4)

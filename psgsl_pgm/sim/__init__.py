@@ -6,7 +6,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
   (:func:`load_room_map`), object lists (:func:`load_objects`), and the embedded :func:`default_house`;
 * wind — potential flow between inlet and outlet windows with a slow divergence-free perturbation
   (:func:`potential_flow`, :func:`make_wind`), or a GADEN CFD export (:func:`read_gaden_wind_csv`);
-* gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensor and anemometer models;
+* gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensors (the ideal :class:`GasSensor`, a
+  metal-oxide :class:`MOXSensor`, a photo-ionisation :class:`PIDSensor`) and the :class:`Anemometer`;
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment;
@@ -36,6 +37,7 @@ from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
 from ._roommap import load_room_map, save_room_map
 from ._rosmap import load_ros_map, save_ros_map
 from ._semantic_map import SemanticMap
+from ._mox import MOXSensor, MOXState, PIDSensor
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
@@ -59,8 +61,11 @@ __all__ = [
     "HOUSE_ROOMS",
     "House",
     "LineOfSightCache",
+    "MOXSensor",
+    "MOXState",
     "NOTHING",
     "OTHER",
+    "PIDSensor",
     "ROOM_RANGE",
     "SceneObject",
     "SemanticMap",

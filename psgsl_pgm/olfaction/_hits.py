@@ -1,0 +1,133 @@
+"""The robot's hit decision from its gas sensor's raw output, with baseline and noise estimated online.
+
+A real robot does not get hits from its sensor: it gets a trace of output samples (a MOX sensor's conductance, a
+PID's ppm) and decides. :class:`HitRule` does so from each reading's samples alone, learning what it needs —
+the noise level, and for the level rule the baseline — from the readings it has seen, never from the sensor's
+specification.
+
+Which statistic, by sensor kind:
+
+* ``"rise"`` (metal-oxide sensors). A MOX sensor recovers several times slower than it rises (τ_d ≈ 16 s against
+  τ_r ≈ 3 s for a TGS2620). After a gas patch its response stays above any level threshold for ~τ_d ln(y/θ) —
+  tens of seconds, i.e. the next several stops, which a level rule would all call hits although they are in
+  clean air; and a new patch met while the response is still decaying does not lift the level much above
+  where it was. The rate of rise sees both correctly: it is negative while the sensor recovers, and positive as
+  soon as gas arrives, whatever the level. It also ignores the baseline: the drift of a MOX baseline (minutes to
+  months) is orders of magnitude slower than a rise within one window, so no baseline has to be tracked. The
+  statistic is the least-squares slope b of the window's samples against their index; the rule fires when
+  b > k·σ̂ / √(Σ (i − ī)²), i.e. when the slope is k standard errors above zero, with σ̂ the median over the
+  readings so far of each window's residual standard deviation about its line (robust to the windows that hold a
+  rise). Its blind spot: a sensor sitting in steady gas for longer than a few τ_r shows no rise — at a stop the
+  robot arrives from elsewhere, so its sensor has been recovering on the way.
+* ``"level"`` (fast sensors, a PID). A PID recovers in about a second, faster than the robot drives between
+  stops, so its level is current: the rule fires when the window mean exceeds the baseline b̂ by k·ŝ, with b̂ the
+  median of the window means so far (robust while fewer than half the readings are in gas) and ŝ the larger of
+  1.4826 × their median absolute deviation (the spread of clean-air readings, drift included) and the median
+  within-window standard deviation over √n (the noise of one window's mean).
+
+No reading is a hit before ``warm_up`` readings have been seen (the estimates need some clean air).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._shared._validate import as_float_array, index, positive
+
+__all__ = ["HIT_RULE_KINDS", "HitRule"]
+
+#: The statistics a :class:`HitRule` can threshold.
+HIT_RULE_KINDS = ("rise", "level")
+
+_MAD_TO_STD = 1.4826  # σ of a normal distribution per median absolute deviation
+
+
+class HitRule:
+    """Online hit/miss decision from the samples of each gas reading (see the module docstring).
+
+    Parameters
+    ----------
+    kind : {"rise", "level"}
+        Threshold on the rate of rise within a window (metal-oxide sensors) or on the baseline-subtracted window
+        mean (fast sensors).
+    k : float, keyword-only
+        Threshold in estimated standard errors (> 0).
+    warm_up : int, keyword-only
+        Readings seen before the first hit can be declared (≥ 1).
+
+    Attributes
+    ----------
+    n_readings : int
+        Readings seen.
+    noise : float
+        σ̂, the estimated noise of one sample in the sensor's units (NaN before the first reading).
+    baseline : float
+        b̂, the estimated clean-air level ("level" rule; NaN before the first reading and for "rise").
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> rule = HitRule("rise")
+    >>> [rule.decide(1.0 + 0.002 * rng.standard_normal(10)) for _ in range(5)]
+    [False, False, False, False, False]
+    >>> rule.decide(1.0 + 0.01 * np.arange(10) + 0.002 * rng.standard_normal(10))
+    True
+    """
+
+    def __init__(self, kind: str, *, k: float = 5.0, warm_up: int = 3):
+        if kind not in HIT_RULE_KINDS:
+            raise ValueError(f"kind must be one of {HIT_RULE_KINDS}, got {kind!r}")
+        self.kind = kind
+        self.k = positive(k, "k")
+        self.warm_up = index(warm_up, "warm_up", minimum=1)
+        self._spread: list[float] = []  # per reading: residual std about the window's line ("rise"), or std
+        self._means: list[float] = []
+
+    @property
+    def n_readings(self) -> int:
+        return len(self._means)
+
+    @property
+    def noise(self) -> float:
+        return float(np.median(self._spread)) if self._spread else float("nan")
+
+    @property
+    def baseline(self) -> float:
+        return float(np.median(self._means)) if self._means and self.kind == "level" else float("nan")
+
+    def decide(self, trace) -> bool:
+        """Whether the reading whose output samples are ``trace`` (n,) is a hit; the estimates learn from it.
+
+        ``"rise"`` needs at least 3 samples per reading (a line and a residual).
+        """
+        v = as_float_array(trace, "trace", ndim=1)
+        if not np.all(np.isfinite(v)):
+            raise ValueError("trace must hold finite output samples")
+        n = v.size
+        if self.kind == "rise":
+            if n < 3:
+                raise ValueError(f"the rise rule needs a trace of at least 3 samples per reading, got {n}")
+            i = np.arange(n, dtype=np.float64) - (n - 1) / 2.0
+            sxx = float(i @ i)
+            slope = float(i @ (v - v.mean())) / sxx
+            resid = v - v.mean() - slope * i
+            self._spread.append(float(np.sqrt(resid @ resid / (n - 2))))
+            self._means.append(float(v.mean()))
+            stat, scale = slope, self.noise / np.sqrt(sxx)
+        else:
+            if n < 1:
+                raise ValueError("trace must hold at least one output sample")
+            mean = float(v.mean())
+            self._spread.append(float(v.std(ddof=1)) if n > 1 else 0.0)
+            self._means.append(mean)
+            means = np.asarray(self._means)
+            b = float(np.median(means))
+            mad = float(np.median(np.abs(means - b)))
+            stat, scale = mean - b, max(_MAD_TO_STD * mad, self.noise / np.sqrt(n))
+        if self.n_readings < self.warm_up:
+            return False
+        return bool(stat > self.k * scale) if scale > 0 else bool(stat > 0)
+
+    def __repr__(self) -> str:
+        return f"HitRule({self.kind!r}, k={self.k:g}, {self.n_readings} readings, noise={self.noise:.3g})"
