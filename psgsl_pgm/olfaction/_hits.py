@@ -15,15 +15,18 @@ Which statistic, by sensor kind:
   soon as gas arrives, whatever the level. It also ignores the baseline: the drift of a MOX baseline (minutes to
   months) is orders of magnitude slower than a rise within one window, so no baseline has to be tracked. The
   statistic is the least-squares slope b of the window's samples against their index; the rule fires when
-  b > k·σ̂ / √(Σ (i − ī)²), i.e. when the slope is k standard errors above zero, with σ̂ the median over the
-  readings so far of each window's residual standard deviation about its line (robust to the windows that hold a
-  rise). Its blind spot: a sensor sitting in steady gas for longer than a few τ_r shows no rise — at a stop the
-  robot arrives from elsewhere, so its sensor has been recovering on the way.
+  b > k·ŝ_b. The slope's noise ŝ_b is the larger of σ̂ / √(Σ (i − ī)²), with σ̂ the median over the readings so
+  far of each window's residual standard deviation about its line (white noise), and 1.4826 × the median
+  absolute deviation of the slopes seen so far about their median (whatever moves the slope in clean air,
+  drift included; robust while fewer than half the readings are in gas or recovering from it). Its blind spot:
+  a sensor sitting in steady gas for longer than a few τ_r shows no rise — at a stop the robot arrives from
+  elsewhere, so its sensor has been recovering on the way.
 * ``"level"`` (fast sensors, a PID). A PID recovers in about a second, faster than the robot drives between
   stops, so its level is current: the rule fires when the window mean exceeds the baseline b̂ by k·ŝ, with b̂ the
-  median of the window means so far (robust while fewer than half the readings are in gas) and ŝ the larger of
-  1.4826 × their median absolute deviation (the spread of clean-air readings, drift included) and the median
-  within-window standard deviation over √n (the noise of one window's mean).
+  median of the last ``memory`` window means (following a drifting baseline; robust while fewer than half of
+  them are in gas) and ŝ the larger of 1.4826 × their median absolute deviation (the spread of clean-air
+  readings, drift included) and the median within-window standard deviation over √n (the noise of one window's
+  mean).
 
 No reading is a hit before ``warm_up`` readings have been seen (the estimates need some clean air).
 """
@@ -54,6 +57,8 @@ class HitRule:
         Threshold in estimated standard errors (> 0).
     warm_up : int, keyword-only
         Readings seen before the first hit can be declared (≥ 1).
+    memory : int, keyword-only
+        Readings behind the level rule's baseline (≥ 1).
 
     Attributes
     ----------
@@ -75,14 +80,16 @@ class HitRule:
     True
     """
 
-    def __init__(self, kind: str, *, k: float = 5.0, warm_up: int = 3):
+    def __init__(self, kind: str, *, k: float = 5.0, warm_up: int = 3, memory: int = 30):
         if kind not in HIT_RULE_KINDS:
             raise ValueError(f"kind must be one of {HIT_RULE_KINDS}, got {kind!r}")
         self.kind = kind
         self.k = positive(k, "k")
         self.warm_up = index(warm_up, "warm_up", minimum=1)
+        self.memory = index(memory, "memory", minimum=1)
         self._spread: list[float] = []  # per reading: residual std about the window's line ("rise"), or std
         self._means: list[float] = []
+        self._slopes: list[float] = []
 
     @property
     def n_readings(self) -> int:
@@ -94,7 +101,9 @@ class HitRule:
 
     @property
     def baseline(self) -> float:
-        return float(np.median(self._means)) if self._means and self.kind == "level" else float("nan")
+        if not self._means or self.kind != "level":
+            return float("nan")
+        return float(np.median(self._means[-self.memory:]))
 
     def decide(self, trace) -> bool:
         """Whether the reading whose output samples are ``trace`` (n,) is a hit; the estimates learn from it.
@@ -114,14 +123,17 @@ class HitRule:
             resid = v - v.mean() - slope * i
             self._spread.append(float(np.sqrt(resid @ resid / (n - 2))))
             self._means.append(float(v.mean()))
-            stat, scale = slope, self.noise / np.sqrt(sxx)
+            self._slopes.append(slope)
+            slopes = np.asarray(self._slopes)
+            spread = _MAD_TO_STD * float(np.median(np.abs(slopes - np.median(slopes))))
+            stat, scale = slope, max(self.noise / np.sqrt(sxx), spread)
         else:
             if n < 1:
                 raise ValueError("trace must hold at least one output sample")
             mean = float(v.mean())
             self._spread.append(float(v.std(ddof=1)) if n > 1 else 0.0)
             self._means.append(mean)
-            means = np.asarray(self._means)
+            means = np.asarray(self._means[-self.memory:])
             b = float(np.median(means))
             mad = float(np.median(np.abs(means - b)))
             stat, scale = mean - b, max(_MAD_TO_STD * mad, self.noise / np.sqrt(n))
