@@ -23,10 +23,11 @@ Which statistic, by sensor kind:
   elsewhere, so its sensor has been recovering on the way.
 * ``"level"`` (fast sensors, a PID). A PID recovers in about a second, faster than the robot drives between
   stops, so its level is current: the rule fires when the window mean exceeds the baseline b̂ by k·ŝ, with b̂ the
-  median of the last ``memory`` window means (following a drifting baseline; robust while fewer than half of
-  them are in gas) and ŝ the larger of 1.4826 × their median absolute deviation (the spread of clean-air
-  readings, drift included) and the median within-window standard deviation over √n (the noise of one window's
-  mean).
+  median of the last ``memory`` window means that were not hits (clean air: it follows a drifting baseline, and
+  a long stay in a plume does not raise it) and ŝ the larger of 1.4826 × their median absolute deviation (the
+  spread of clean-air readings, drift included) and the median within-window standard deviation over √n (the
+  noise of one window's mean). Its blind spot: a jump of the baseline larger than the threshold would be taken
+  for gas until the robot is restarted (a PID's zero does not jump).
 
 No reading is a hit before ``warm_up`` readings have been seen (the estimates need some clean air).
 """
@@ -89,6 +90,7 @@ class HitRule:
         self.memory = index(memory, "memory", minimum=1)
         self._spread: list[float] = []  # per reading: residual std about the window's line ("rise"), or std
         self._means: list[float] = []
+        self._clean: list[float] = []  # "level": the window means that were not hits
         self._slopes: list[float] = []
 
     @property
@@ -103,7 +105,7 @@ class HitRule:
     def baseline(self) -> float:
         if not self._means or self.kind != "level":
             return float("nan")
-        return float(np.median(self._means[-self.memory:]))
+        return float(np.median(self._clean[-self.memory:]))
 
     def decide(self, trace) -> bool:
         """Whether the reading whose output samples are ``trace`` (n,) is a hit; the estimates learn from it.
@@ -133,13 +135,14 @@ class HitRule:
             mean = float(v.mean())
             self._spread.append(float(v.std(ddof=1)) if n > 1 else 0.0)
             self._means.append(mean)
-            means = np.asarray(self._means[-self.memory:])
+            means = np.asarray((self._clean + [mean])[-self.memory:])  # this reading counts until judged
             b = float(np.median(means))
             mad = float(np.median(np.abs(means - b)))
             stat, scale = mean - b, max(_MAD_TO_STD * mad, self.noise / np.sqrt(n))
-        if self.n_readings < self.warm_up:
-            return False
-        return bool(stat > self.k * scale) if scale > 0 else bool(stat > 0)
+        hit = self.n_readings > self.warm_up - 1 and (stat > self.k * scale if scale > 0 else stat > 0)
+        if self.kind == "level" and not hit:
+            self._clean.append(self._means[-1])
+        return bool(hit)
 
     def __repr__(self) -> str:
         return f"HitRule({self.kind!r}, k={self.k:g}, {self.n_readings} readings, noise={self.noise:.3g})"
