@@ -260,3 +260,11 @@ def test_mox_hits_are_the_rise_rule_on_the_readings_and_the_ideal_sensors_are_it
     with pytest.raises(ValueError, match="leaves the hit decision to the robot"):
         visit(make_world(seed=0, warm_up=0.0, gas_sensor=MOXSensor()), tour.stops[0], tour.headings[0], config,
               camera=False)
+
+
+def test_recording_a_world_whose_hits_the_robot_decides_is_refused_before_anything_is_written():
+    from psgsl_pgm.experiment._record import EpisodeRecorder
+
+    world = make_world(seed=0, warm_up=0.0, gas_sensor=MOXSensor())
+    with pytest.raises(ValueError, match="--record needs the world's thresholded GasSensor, got a MOXSensor"):
+        EpisodeRecorder().watch(world)
