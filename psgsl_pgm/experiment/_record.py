@@ -77,7 +77,8 @@ class EpisodeRecorder:
         from ..sim import GasSensor
 
         if not isinstance(world.gas_sensor, GasSensor):
-            raise ValueError(f"--record needs the world's thresholded GasSensor, got a {type(world.gas_sensor).__name__} "
+            kind = type(world.gas_sensor).__name__
+            raise ValueError(f"--record needs the world's thresholded GasSensor, got a {kind} "
                              "(its hits are decided by the robot from each reading's samples, which a bag does not "
                              "hold)")
         self._world = world

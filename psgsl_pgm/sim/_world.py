@@ -18,8 +18,8 @@ from ._classes import reindex
 from ._detector import DetectorModel
 from ._filaments import FilamentModel, FilamentParams
 from ._house import House, default_house
-from ._semantic_map import SemanticMap
 from ._mox import MOXSensor, PIDSensor
+from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind
 
