@@ -56,14 +56,16 @@ def robot_hit_rule(sensor) -> HitRule | None:
     """The robot's hit rule for a gas sensor of ``sensor``'s kind (its class only; no attribute is read).
 
     None for a sensor that decides its own hits (:class:`psgsl_pgm.sim.GasSensor`: a calibrated ppm reading and
-    its threshold, used unchanged); a fresh :class:`psgsl_pgm.olfaction.HitRule` — ``"rise"`` for a
-    :class:`psgsl_pgm.sim.MOXSensor`, ``"level"`` for a :class:`psgsl_pgm.sim.PIDSensor` — per run otherwise.
+    its threshold, used unchanged); a fresh :class:`psgsl_pgm.olfaction.HitRule` per run otherwise: ``"rise"``
+    for a :class:`psgsl_pgm.sim.MOXSensor` (a t-test from the first reading), ``"level"`` from a clean-air zero of
+    0 ppm for a :class:`psgsl_pgm.sim.PIDSensor` (what a ppm instrument zeroed in fresh air reads, a property of
+    the kind).
     """
     kind = type(sensor)
     if issubclass(kind, MOXSensor):
-        return HitRule("rise")
-    if issubclass(kind, PIDSensor):
-        return HitRule("level")
+        return HitRule("rise", warm_up=1)
+    if issubclass(kind, PIDSensor):  # ppm output, zeroed in fresh air before a run
+        return HitRule("level", warm_up=1, zero=0.0)
     return None
 
 

@@ -15,19 +15,24 @@ Which statistic, by sensor kind:
   soon as gas arrives, whatever the level. It also ignores the baseline: the drift of a MOX baseline (minutes to
   months) is orders of magnitude slower than a rise within one window, so no baseline has to be tracked. The
   statistic is the least-squares slope b of the window's samples against their index; the rule fires when
-  b > k·ŝ_b. The slope's noise ŝ_b is the larger of σ̂ / √(Σ (i − ī)²), with σ̂ the median over the readings so
-  far of each window's residual standard deviation about its line (white noise), and 1.4826 × the median
-  absolute deviation of the slopes seen so far about their median (whatever moves the slope in clean air,
-  drift included; robust while fewer than half the readings are in gas or recovering from it). Its blind spot:
-  a sensor sitting in steady gas for longer than a few τ_r shows no rise — at a stop the robot arrives from
-  elsewhere, so its sensor has been recovering on the way.
+  b > k·σ̂ / √(Σ (i − ī)²), k standard errors above zero, with σ̂ the median over the readings so far of each
+  window's residual standard deviation about its line (robust to the windows that hold a rise or a recovery;
+  valid from the first reading, a t-test with n − 2 degrees of freedom). It treats the noise as white: a
+  baseline random walk that moves the samples within one window as much as the noise does also tilts the slope,
+  which the residuals understate. With :class:`psgsl_pgm.sim.MOXSensor`'s noise, false hits in clean air stay
+  below 1 in 2000 readings up to four times its default drift (σ_d = 2·10⁻³ s^(−1/2)), and reach 1.6 % at ten
+  times and 5.6 % at twenty (``tests/olfaction/test_olfaction_hits.py``). Its blind spot: a sensor sitting in
+  steady gas for longer than a few τ_r shows no rise — at a stop the robot arrives from elsewhere, so its sensor
+  has been recovering on the way.
 * ``"level"`` (fast sensors, a PID). A PID recovers in about a second, faster than the robot drives between
   stops, so its level is current: the rule fires when the window mean exceeds the baseline b̂ by k·ŝ, with b̂ the
   median of the last ``memory`` window means that were not hits (clean air: it follows a drifting baseline, and
   a long stay in a plume does not raise it) and ŝ the larger of 1.4826 × their median absolute deviation (the
   spread of clean-air readings, drift included) and the median within-window standard deviation over √n (the
-  noise of one window's mean). Its blind spot: a jump of the baseline larger than the threshold would be taken
-  for gas until the robot is restarted (a PID's zero does not jump).
+  noise of one window's mean, over the clean readings and this one). A reading in gas before any clean one would
+  become the baseline: given the sensor's known clean-air output (``zero``: a PID is zeroed in fresh air before
+  a run) the rule starts from it and decides from the first reading. Its blind spot: a jump of the baseline
+  larger than the threshold would be taken for gas until the robot is restarted (a PID's zero does not jump).
 
 No reading is a hit before ``warm_up`` readings have been seen (the estimates need some clean air).
 """
@@ -36,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._shared._validate import as_float_array, index, positive
+from .._shared._validate import as_float_array, index, positive, real_number
 
 __all__ = ["HIT_RULE_KINDS", "HitRule"]
 
@@ -60,6 +65,9 @@ class HitRule:
         Readings seen before the first hit can be declared (≥ 1).
     memory : int, keyword-only
         Readings behind the level rule's baseline (≥ 1).
+    zero : float, optional, keyword-only
+        The level rule's clean-air output known before the first reading (0 ppm for a PID zeroed in fresh air
+        before the run, as its manual prescribes), counted as its first clean reading.
 
     Attributes
     ----------
@@ -81,17 +89,18 @@ class HitRule:
     True
     """
 
-    def __init__(self, kind: str, *, k: float = 5.0, warm_up: int = 3, memory: int = 30):
+    def __init__(self, kind: str, *, k: float = 5.0, warm_up: int = 3, memory: int = 30, zero: float | None = None):
         if kind not in HIT_RULE_KINDS:
             raise ValueError(f"kind must be one of {HIT_RULE_KINDS}, got {kind!r}")
         self.kind = kind
         self.k = positive(k, "k")
         self.warm_up = index(warm_up, "warm_up", minimum=1)
         self.memory = index(memory, "memory", minimum=1)
-        self._spread: list[float] = []  # per reading: residual std about the window's line ("rise"), or std
+        self._spread: list[float] = []  # "rise": per reading, the residual std about the window's line
         self._means: list[float] = []
-        self._clean: list[float] = []  # "level": the window means that were not hits
-        self._slopes: list[float] = []
+        self._clean: list[float] = [] if zero is None else [real_number(zero, "zero")]
+        self._clean_spread: list[float] = []  # "level": the window means and standard deviations that were not hits
+        self._all_spread: list[float] = []
 
     @property
     def n_readings(self) -> int:
@@ -99,7 +108,8 @@ class HitRule:
 
     @property
     def noise(self) -> float:
-        return float(np.median(self._spread)) if self._spread else float("nan")
+        spread = self._spread if self.kind == "rise" else self._clean_spread
+        return float(np.median(spread)) if spread else float("nan")
 
     @property
     def baseline(self) -> float:
@@ -125,23 +135,26 @@ class HitRule:
             resid = v - v.mean() - slope * i
             self._spread.append(float(np.sqrt(resid @ resid / (n - 2))))
             self._means.append(float(v.mean()))
-            self._slopes.append(slope)
-            slopes = np.asarray(self._slopes)
-            spread = _MAD_TO_STD * float(np.median(np.abs(slopes - np.median(slopes))))
-            stat, scale = slope, max(self.noise / np.sqrt(sxx), spread)
+            stat, scale = slope, self.noise / np.sqrt(sxx)
         else:
             if n < 1:
                 raise ValueError("trace must hold at least one output sample")
             mean = float(v.mean())
-            self._spread.append(float(v.std(ddof=1)) if n > 1 else 0.0)
             self._means.append(mean)
-            means = np.asarray((self._clean + [mean])[-self.memory:])  # this reading counts until judged
-            b = float(np.median(means))
-            mad = float(np.median(np.abs(means - b)))
-            stat, scale = mean - b, max(_MAD_TO_STD * mad, self.noise / np.sqrt(n))
+            std = float(v.std(ddof=1)) if n > 1 else 0.0
+            clean = np.asarray(self._clean[-self.memory:])
+            b = float(np.median(clean)) if clean.size else mean  # no clean reading yet: no hit
+            mad = float(np.median(np.abs(clean - b))) if clean.size > 1 else 0.0
+            self._all_spread.append(std)
+            # the noise of one sample: from the clean windows and this one; a window whose samples are all equal
+            # (an output clipped at zero) tells nothing of it, and without any other, all windows so far count
+            stds = [x for x in self._clean_spread[-self.memory:] + [std] if x > 0] or \
+                [x for x in self._all_spread if x > 0] or [0.0]
+            stat, scale = mean - b, max(_MAD_TO_STD * mad, float(np.median(stds)) / np.sqrt(n))
         hit = self.n_readings > self.warm_up - 1 and (stat > self.k * scale if scale > 0 else stat > 0)
         if self.kind == "level" and not hit:
-            self._clean.append(self._means[-1])
+            self._clean.append(mean)
+            self._clean_spread.append(std)
         return bool(hit)
 
     def __repr__(self) -> str:
