@@ -74,9 +74,11 @@ class HitRule:
     n_readings : int
         Readings seen.
     noise : float
-        σ̂, the estimated noise of one sample in the sensor's units (NaN before the first reading).
+        σ̂, the estimated noise of one sample in the sensor's units (NaN before the first reading; the level rule's
+        from the windows that were not hits).
     baseline : float
-        b̂, the estimated clean-air level ("level" rule; NaN before the first reading and for "rise").
+        b̂, the estimated clean-air level ("level" rule; NaN before the first clean reading or ``zero``, and for
+        "rise").
 
     Examples
     --------
@@ -96,6 +98,8 @@ class HitRule:
         self.k = positive(k, "k")
         self.warm_up = index(warm_up, "warm_up", minimum=1)
         self.memory = index(memory, "memory", minimum=1)
+        if zero is not None and kind != "level":
+            raise ValueError(f"zero is the level rule's clean-air output; the {kind!r} rule has no baseline")
         self._spread: list[float] = []  # "rise": per reading, the residual std about the window's line
         self._means: list[float] = []
         self._clean: list[float] = [] if zero is None else [real_number(zero, "zero")]
@@ -113,7 +117,7 @@ class HitRule:
 
     @property
     def baseline(self) -> float:
-        if not self._means or self.kind != "level":
+        if not self._clean or self.kind != "level":
             return float("nan")
         return float(np.median(self._clean[-self.memory:]))
 

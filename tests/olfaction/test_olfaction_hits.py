@@ -108,6 +108,7 @@ def test_noise_and_baseline_are_estimated_from_the_readings():
     _decide(level, _stops(pid, np.r_[np.zeros(100), np.full(10, 2.0)], seed=2))
     assert level.baseline == pytest.approx(0.0, abs=0.03)  # a clean-air PID mean clipped at 0
     assert 0.02 < level.noise < 0.05
+    assert HitRule("level", zero=0.0).baseline == 0.0 and np.isnan(HitRule("level").baseline)
 
 
 def test_warm_up_and_a_rise_that_is_k_standard_errors():
@@ -129,6 +130,8 @@ def test_warm_up_and_a_rise_that_is_k_standard_errors():
     (("derivative",), {}, ValueError, "kind must be one of"),
     (("rise",), {"k": 0.0}, ValueError, "k"),
     (("rise",), {"warm_up": 0}, ValueError, "warm_up"),
+    (("rise",), {"zero": 0.0}, ValueError, "no baseline"),
+    (("level",), {"zero": float("nan")}, ValueError, "zero"),
 ])
 def test_bad_rule_settings(args, kwargs, err, match):
     with pytest.raises(err, match=match):
