@@ -67,7 +67,20 @@ class EpisodeRecorder:
         self._world = None
 
     def watch(self, world):
-        """``world`` wrapped so that its readings and frames are logged."""
+        """``world`` wrapped so that its readings and frames are logged.
+
+        Only a world with the thresholded :class:`psgsl_pgm.sim.GasSensor` can be recorded: the bag holds one value
+        per reading and ``psgsl replay`` thresholds it; a sensor whose hits the robot decides from the window's
+        samples (:class:`psgsl_pgm.sim.MOXSensor`, :class:`psgsl_pgm.sim.PIDSensor`) is a ValueError before
+        anything is written.
+        """
+        from ..sim import GasSensor
+
+        if not isinstance(world.gas_sensor, GasSensor):
+            kind = type(world.gas_sensor).__name__
+            raise ValueError(f"--record needs the world's thresholded GasSensor, got a {kind} "
+                             "(its hits are decided by the robot from each reading's samples, which a bag does not "
+                             "hold)")
         self._world = world
         self._t0 = world.time
         return _Watched(world, self)

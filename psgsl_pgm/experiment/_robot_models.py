@@ -16,6 +16,11 @@ detector model estimated on reference houses.
   house's own persistent errors and distractor sites from ``frame_seed``) — the calibration a robot makes with
   its own detector on labelled houses; the estimate is still the per-cell model of ``from_counts``, which
   knows nothing of the errors' persistence.
+* **Gas hits.** The robot knows which kind of gas sensor it carries, not its parameters: the ideal
+  :class:`psgsl_pgm.sim.GasSensor` reports a calibrated, thresholded reading whose hit is used as it is; for a
+  metal-oxide sensor the robot thresholds the rate of rise, for a photo-ionisation detector the
+  baseline-subtracted level (:class:`psgsl_pgm.olfaction.HitRule`, noise and baseline estimated online from its
+  own readings).
 """
 
 from __future__ import annotations
@@ -24,12 +29,14 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..sim import HOUSE_CLASSES, Camera, DetectorErrors, DetectorModel, default_house, potential_flow, take_frame
+from ..olfaction import HitRule
+from ..sim import (HOUSE_CLASSES, Camera, DetectorErrors, DetectorModel, MOXSensor, PIDSensor, default_house,
+                   potential_flow, take_frame)
 from ..sim._classes import OTHER, match_names
 from ..sim._house_ontology import REFERENCE_SEEDS
 from ._tour import exploration_tour
 
-__all__ = ["robot_detector_model", "wind_basis"]
+__all__ = ["robot_detector_model", "robot_hit_rule", "wind_basis"]
 
 _STOP_STRIDE = 3  # frames at every third stop of each reference tour (~10^6 labelled cells over ten houses)
 
@@ -48,6 +55,23 @@ def wind_basis(house) -> np.ndarray:
     basis[0, ..., 0] = grid.free
     basis[1, ..., 1] = grid.free
     return basis
+
+
+def robot_hit_rule(sensor) -> HitRule | None:
+    """The robot's hit rule for a gas sensor of ``sensor``'s kind (its class only; no attribute is read).
+
+    None for a sensor that decides its own hits (:class:`psgsl_pgm.sim.GasSensor`: a calibrated ppm reading and
+    its threshold, used unchanged); a fresh :class:`psgsl_pgm.olfaction.HitRule` per run otherwise: ``"rise"``
+    for a :class:`psgsl_pgm.sim.MOXSensor` (a t-test from the first reading), ``"level"`` from a clean-air zero of
+    0 ppm for a :class:`psgsl_pgm.sim.PIDSensor` (what a ppm instrument zeroed in fresh air reads, a property of
+    the kind).
+    """
+    kind = type(sensor)
+    if issubclass(kind, MOXSensor):
+        return HitRule("rise", warm_up=1)
+    if issubclass(kind, PIDSensor):  # ppm output, zeroed in fresh air before a run
+        return HitRule("level", warm_up=1, zero=0.0)
+    return None
 
 
 @lru_cache(maxsize=4)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ._config import VARIANTS, ExperimentConfig
 from ._metrics import credible_region, error_and_spread, hpd_level
-from ._step import VariantPosteriors, semantic_terms, start_run, visit
+from ._step import VariantPosteriors, robot_hit_rule, semantic_terms, start_run, visit
 from ._tour import Tour, exploration_tour
 
 __all__ = ["RunResult", "run_config", "run_search", "semantic_terms", "step_metrics", "walk"]
@@ -80,11 +80,12 @@ def walk(world, tour: Tour, config: ExperimentConfig, *, camera: bool = True):
 
     Between stops the world advances by the driving time (distance / ``config.speed``); at a look-around
     waypoint by ``config.turn_time`` per heading (:func:`visit`). ``camera=False`` skips the frames
-    (calibration runs).
+    (calibration runs). Gas hits are the robot's decision (:func:`robot_hit_rule`).
     """
+    hits = robot_hit_rule(world.gas_sensor)  # the robot's hit decision for its kind of sensor, fresh per walk
     for j, stop in enumerate(tour.stops):
         drive = float(np.linalg.norm(stop - tour.stops[j - 1])) if j else 0.0
-        reading, wind, frames = visit(world, stop, tour.headings[j], config, drive=drive, camera=camera)
+        reading, wind, frames = visit(world, stop, tour.headings[j], config, drive=drive, camera=camera, hits=hits)
         yield j, stop, reading, wind, frames
 
 

@@ -8,8 +8,9 @@ posterior of each information variant of :data:`VARIANTS`:
     semantics        p(s | g, z)     ∝ p(s | g) · p(s | z)        (class beliefs from p(o))
     semantics+rooms  p(s | g, z)     ∝ p(s | g) · p(s | z)        (class beliefs from p(o | room))
 
-:func:`visit` is the robot's physics at one stop: drive (the gas keeps evolving), one gas reading, one wind
-reading, and the camera frames at the requested headings (turning between them). :func:`start_run` checks a
+:func:`visit` is the robot's physics at one stop: drive (the gas keeps evolving), one gas reading (its hit
+decided by the robot's rule for its kind of sensor, :func:`robot_hit_rule`), one wind reading, and the camera
+frames at the requested headings (turning between them). :func:`start_run` checks a
 run's settings and makes its world, the same way for both.
 """
 
@@ -26,9 +27,9 @@ from ..core._semantic import semantic_source_probability
 from ..olfaction import GridInfotaxis, MeanWindEstimator, PlumeModel, PMFSEstimator
 from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
-from ._robot_models import robot_detector_model, wind_basis
+from ._robot_models import robot_detector_model, robot_hit_rule, wind_basis
 
-__all__ = ["VariantPosteriors", "make_estimator", "semantic_terms", "start_run", "visit"]
+__all__ = ["VariantPosteriors", "make_estimator", "robot_hit_rule", "semantic_terms", "start_run", "visit"]
 
 
 def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
@@ -93,19 +94,27 @@ def make_estimator(name, model, config, *, prior=None):
 
 
 def visit(world, stop, headings, config: ExperimentConfig, *, drive: float = 0.0, turn: float = 0.0,
-          camera: bool = True):
+          camera: bool = True, hits=None):
     """The robot at one stop: returns ``(gas reading, wind, frames)``.
 
     The world first advances by ``drive`` / ``config.speed`` (driving ``drive`` metres) and by ``turn`` seconds
     (turning before the stop's first frame), both skipped when zero; then one gas reading and one wind
     reading at ``stop``; then one frame per heading, with ``config.turn_time`` after each when there are
     several (a look-around). ``camera=False`` skips the frames (calibration runs).
+
+    ``hits`` is the run's :class:`psgsl_pgm.olfaction.HitRule` (:func:`robot_hit_rule`): the returned reading's
+    ``hit`` is then its decision on the reading's samples. Without one the sensor's own hit is returned (a
+    sensor that leaves hits to the robot is then a ValueError).
     """
     if drive:
         world.advance(float(drive) / config.speed)
     if turn:
         world.advance(float(turn))
     reading = world.sense_gas(stop)
+    if hits is not None:
+        reading = replace(reading, hit=hits.decide(reading.trace))
+    elif reading.hit is None:
+        raise ValueError("this gas sensor leaves the hit decision to the robot: pass hits=robot_hit_rule(sensor)")
     wind = world.sense_wind(stop)
     frames = []
     for heading in headings if camera else ():

@@ -13,6 +13,9 @@ factorisation; Green's functions for all candidate sources from one adjoint solv
 Either posterior is the olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
 and is combined with the semantic term by :func:`psgsl_pgm.fuse`.
 
+Hits are the robot's decision from its sensor's output (:class:`HitRule`: the rate of rise for a metal-oxide
+sensor, the baseline-subtracted level for a fast one, each estimated online from the robot's own readings).
+
 The open-space analytic solution of Vergassola et al. (:func:`vergassola_concentration`) validates the grid
 model.
 """
@@ -39,6 +42,7 @@ from ._calibrate import (
     score_tempering,
 )
 from ._hitmap import HitProbabilityMap
+from ._hits import HIT_RULE_KINDS, HitRule
 from ._infotaxis import GridInfotaxis
 from ._operator import advection_diffusion_operator, bernoulli
 from ._plume import PlumeModel
@@ -46,9 +50,11 @@ from ._pmfs import PMFSEstimator
 from ._wind_estimate import MeanWindEstimator
 
 __all__ = [
+    "HIT_RULE_KINDS",
     "CalibrationRun",
     "GridInfotaxis",
     "HitProbabilityMap",
+    "HitRule",
     "MeanWindEstimator",
     "Observation",
     "OlfactoryEstimator",

@@ -51,7 +51,7 @@ import numpy as np
 from .._shared._validate import index, positive, real_pair, unit_interval
 from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import _error_and_spread
-from ..experiment._step import VariantPosteriors, start_run, visit
+from ..experiment._step import VariantPosteriors, robot_hit_rule, start_run, visit
 from ..experiment._tour import exploration_tour
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
@@ -284,6 +284,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
                           n_headings=search.n_headings)
     beliefs = VariantPosteriors(world, estimator, config, setting=setting, variants=(variant,))
+    hits = robot_hit_rule(world.gas_sensor)  # the robot's hit decision for its kind of sensor
     tour = exploration_tour(house, start=start_xy, clearance=search.clearance)
     plan = _tour_plan(tour) if policy == "tour" else None
     centres = house.grid.cell_centres().reshape(-1, 2)
@@ -382,7 +383,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                 world.advance(arc / config.speed)
                 break
         reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn,
-                                      camera=not beliefs.mapped)
+                                      camera=not beliefs.mapped, hits=hits)
         beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
         beliefs.observe(stop, reading, wind, frames)
         length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0

@@ -8,7 +8,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
   (:func:`potential_flow`, :func:`make_wind`), a GADEN CFD export (:func:`read_gaden_wind_csv`, written by
   :func:`write_gaden_wind_csv`), or time-resolved lattice Boltzmann CFD through the house (:func:`cfd_wind`, the
   ``cfd`` extra);
-* gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensor and anemometer models;
+* gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensors (the ideal :class:`GasSensor`, a
+  metal-oxide :class:`MOXSensor`, a photo-ionisation :class:`PIDSensor`) and the :class:`Anemometer`;
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment, optionally with the robot's localisation
@@ -43,6 +44,7 @@ from ._pose import LocalisationError
 from ._roommap import load_room_map, save_room_map
 from ._rosmap import load_ros_map, save_ros_map
 from ._semantic_map import SemanticMap
+from ._mox import MOXSensor, MOXState, PIDSensor
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
@@ -69,9 +71,12 @@ __all__ = [
     "House",
     "LineOfSightCache",
     "LocalisationError",
+    "MOXSensor",
+    "MOXState",
     "NOTHING",
     "OCCLUSIONS",
     "OTHER",
+    "PIDSensor",
     "ROOM_RANGE",
     "SceneObject",
     "SemanticMap",

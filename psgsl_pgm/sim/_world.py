@@ -32,6 +32,7 @@ from ._classes import reindex
 from ._detector import DetectorErrors, DetectorModel
 from ._filaments import FilamentModel, FilamentParams
 from ._house import House, default_house
+from ._mox import MOXSensor, PIDSensor
 from ._pose import LocalisationError
 from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
@@ -53,7 +54,7 @@ class World:
     detector_errors : DetectorErrors or None
         The detector's errors fixed for this world, drawn from its seed (None for a detector without
         persistent or recurring errors).
-    gas_sensor : GasSensor
+    gas_sensor : GasSensor, MOXSensor or PIDSensor
     anemometer : Anemometer
     source : (2,) ndarray
         Gas source position, metres.
@@ -79,7 +80,8 @@ class World:
         ss = np.random.SeedSequence([int(seed), 7])
         r1, r2, r3 = (np.random.default_rng(s) for s in ss.spawn(3))
         self._rng_gas_sensor, self._rng_anemometer, self._rng_camera = r1, r2, r3
-        self._sensor_state = 0.0
+        self._sensor_state = 0.0  # what the gas sensor continues from (a float, or e.g. a MOXState)
+        self._sensor_time = None  # world time at the end of the last gas reading
         # the detector's errors fixed for this world (persistent instance labels, distractor sites): drawn once
         # from a fourth stream of the seed (the three above are untouched), only for a detector that has them
         self.detector_errors = (DetectorErrors.draw(detector, house, np.random.default_rng(ss.spawn(1)[0]))
@@ -188,18 +190,26 @@ class World:
     def sense_gas(self, xy, *, duration: float | None = None) -> GasReading:
         """Hold the gas sensor at ``xy`` for one window (or ``duration`` s) while the world advances.
 
-        The sensor samples the concentration after every time step; its first-order lag continues from the
-        previous reading wherever that was taken. With a localisation error, ``xy`` is where the robot
-        believes it is, and the sensor samples at its true position when the window starts.
+        The sensor samples the concentration after every time step and continues from its state at the end of
+        the previous reading, wherever that was taken; the time since then is passed to the sensor's ``idle``
+        first (:class:`GasSensor`: nothing changes; :class:`MOXSensor`: it recovers in clean air and its
+        baseline drifts).
+
+        With a localisation error, ``xy`` is where the robot believes it is, and the sensor samples at its true
+        position when the window starts.
         """
         xy = np.asarray(xy, dtype=np.float64)
         if self.localisation is not None:
             xy = self.true_positions(xy)
         dt = self.dt
-        n = self.gas_sensor.samples(dt) if duration is None else max(1, int(round(duration / dt)))
+        sensor = self.gas_sensor
+        n = sensor.samples(dt) if duration is None else max(1, int(round(duration / dt)))
+        state = self._sensor_state
+        if self._sensor_time is not None and self.time > self._sensor_time:
+            state = sensor.idle(state, self.time - self._sensor_time, rng=self._rng_gas_sensor)
         samples = self.gas.sample(xy, n)  # the clock: one step per sample
-        reading = self.gas_sensor.read(samples, dt, initial=self._sensor_state, rng=self._rng_gas_sensor)
-        self._sensor_state = reading.state
+        reading = sensor.read(samples, dt, initial=state, rng=self._rng_gas_sensor)
+        self._sensor_state, self._sensor_time = reading.state, self.time
         return reading
 
     def sense_wind(self, xy) -> np.ndarray:
@@ -322,7 +332,7 @@ def object_at(house: House, xy):
 def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean_speed: float = 0.2,
                perturbation: float = 0.3, params: FilamentParams | None = None, warm_up: float = 60.0,
                duration: float = 600.0, camera: Camera | None = None, detector: DetectorModel | None = None,
-               gas_sensor: GasSensor | None = None, anemometer: Anemometer | None = None,
+               gas_sensor=None, anemometer: Anemometer | None = None,
                wind: WindSequence | None = None, localisation: LocalisationError | None = None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
 
@@ -345,6 +355,8 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         Seconds of wind snapshots before they loop.
     camera, detector, gas_sensor, anemometer : optional, keyword-only
         Defaults: ``Camera()``, ``DetectorModel.default(house.classes)``, ``GasSensor()``, ``Anemometer()``.
+        ``gas_sensor`` may also be a :class:`MOXSensor` or a :class:`PIDSensor` (their hits are decided by the
+        robot, :class:`psgsl_pgm.olfaction.HitRule`).
     wind : WindSequence, optional, keyword-only
         Given wind snapshots (e.g. a GADEN CFD export) instead of :func:`make_wind` between the house's windows
         (``mean_speed`` and ``perturbation`` are then unused); on the house's grid.
@@ -380,6 +392,8 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
     elif not isinstance(wind, WindSequence) or wind.grid.shape != house.grid.shape:
         raise ValueError(f"wind must be a WindSequence on the house's {house.grid.shape} grid, got {wind!r}")
     gas = FilamentModel(house.grid, wind, source, params=params, outlet=house.outlet, seed=gas_seed)
+    if gas_sensor is not None and not isinstance(gas_sensor, (GasSensor, MOXSensor, PIDSensor)):
+        raise TypeError(f"gas_sensor must be a GasSensor, MOXSensor or PIDSensor, got {type(gas_sensor).__name__}")
     world = World(
         house, wind, gas,
         camera=camera if camera is not None else Camera(),

@@ -1,4 +1,5 @@
-"""The robot's own models in the experiment: wind from its anemometer, its detector model from reference houses."""
+"""The robot's own models in the experiment: wind from its anemometer, its detector model from reference houses,
+its gas hits from its own rule; none of them reads the simulator's wind, detector or sensor parameters."""
 
 import sys
 
@@ -7,10 +8,11 @@ import pytest
 
 from psgsl_pgm.experiment import ExperimentConfig, VariantPosteriors
 from psgsl_pgm.experiment._config import PARAMETER_GRID
-from psgsl_pgm.experiment._robot_models import robot_detector_model, wind_basis
+from psgsl_pgm.experiment._robot_models import robot_detector_model, robot_hit_rule, wind_basis
 from psgsl_pgm.experiment._run import walk
 from psgsl_pgm.experiment._tour import exploration_tour
-from psgsl_pgm.sim import HOUSE_CLASSES, Camera, DetectorModel, LocalisationError, make_world
+from psgsl_pgm.sim import (HOUSE_CLASSES, Camera, DetectorModel, GasSensor, LocalisationError, MOXSensor, PIDSensor,
+                           make_world)
 
 
 class _SimulatorOnlyWind:
@@ -274,3 +276,104 @@ def test_the_robot_can_calibrate_on_reference_frames_of_a_realistic_detector():
     assert robot.false_positive > 0.01
     with pytest.raises(TypeError, match="realistic must be True or False"):
         robot_detector_model(realistic="yes")
+
+
+# ---- gas hits: the robot's rule for its kind of sensor, never the sensor's parameters -----------------------------
+class _SimulatorOnlyMOX(MOXSensor):
+    """A MOX sensor whose parameters only the simulator's own modules may read (its class stays visible: the
+    robot knows which kind of sensor it carries). ``allowed`` names what robot-side code may read."""
+
+    allowed: frozenset = frozenset()
+
+    def __getattribute__(self, name):
+        if not name.startswith("__") and name != "allowed":
+            caller = sys._getframe(1).f_globals.get("__name__", "")
+            if not caller.startswith("psgsl_pgm.sim") and name not in type(self).allowed:
+                raise RuntimeError(f"{caller} read the gas sensor's .{name}")
+        return object.__getattribute__(self, name)
+
+
+class _LoopMOX(_SimulatorOnlyMOX):
+    # the closed loop plans with the time it stands at a stop to read (its sampling window, a robot setting);
+    # nothing that characterises the sensing element
+    allowed = frozenset({"window"})
+
+
+def test_the_sensor_guard_catches_a_read_of_its_parameters():
+    s = _SimulatorOnlyMOX()
+    with pytest.raises(RuntimeError, match=r"read the gas sensor's \.recovery_time"):
+        s.recovery_time
+    with pytest.raises(RuntimeError, match=r"read the gas sensor's \.read"):
+        s.read([1.0] * 10, 0.1, rng=np.random.default_rng(0))
+    assert isinstance(s, MOXSensor) and robot_hit_rule(s).kind == "rise"  # its kind, not its parameters
+
+
+def test_the_fixed_tour_decides_mox_hits_without_reading_the_sensor():
+    world = make_world(seed=0, source="oven", warm_up=60.0, gas_sensor=_SimulatorOnlyMOX())
+    config = ExperimentConfig()
+    beliefs = VariantPosteriors(world, "infotaxis", config)
+    tour = exploration_tour(world.house).first(100)
+    hits = []
+    for _, stop, reading, wind, frames in walk(world, tour, config, camera=False):
+        beliefs.observe(stop, reading, wind, frames)
+        hits.append(reading.hit)
+    assert all(isinstance(h, bool) for h in hits)
+    assert 5 <= sum(hits) <= 30  # this tour meets the oven's plume (18 hits over the whole tour)
+    assert beliefs.estimator.posterior.sum() == pytest.approx(1.0)
+
+
+def test_the_closed_loop_runs_with_a_mox_sensor_without_reading_its_parameters():
+    from psgsl_pgm.search import SearchConfig, run_closed_loop
+
+    world = make_world(seed=1, source="oven", warm_up=60.0, gas_sensor=_LoopMOX())
+    run = run_closed_loop("oven", 1, "infotaxis", "semantics+rooms", world=world,
+                          search=SearchConfig(time_budget=60.0))
+    assert run.hit.dtype == bool and len(run.hit) >= 2 and np.isfinite(run.error).all()
+
+
+def test_the_experiment_runs_with_mox_and_pid_sensors_from_make_world():
+    from psgsl_pgm.experiment import run_search
+
+    for sensor in (MOXSensor(), PIDSensor()):
+        world = make_world(seed=2, source="oven", warm_up=30.0, gas_sensor=sensor)
+        run = run_search("oven", 2, "pmfs", config=ExperimentConfig(stops=10), world=world)
+        assert run.hit.dtype == bool and run.n_steps == 10 and np.isfinite(run.error).all()
+
+
+def test_mox_hits_are_the_rise_rule_on_the_readings_and_the_ideal_sensors_are_its_own():
+    """The tour's MOX hits are HitRule("rise") applied to the raw readings; the ideal sensor's hits are exactly
+    value >= threshold, the reading passed through untouched (the golden episodes rest on this)."""
+    from psgsl_pgm.experiment._step import visit
+    from psgsl_pgm.olfaction import HitRule
+
+    config = ExperimentConfig()
+    assert robot_hit_rule(GasSensor()) is None
+    assert robot_hit_rule(MOXSensor()).kind == "rise" and robot_hit_rule(PIDSensor()).kind == "level"
+    world = make_world(seed=0, source="oven", warm_up=60.0)
+    tour = exploration_tour(world.house).first(100)
+    readings = [r for _, _, r, _, _ in walk(world, tour, config, camera=False)]
+    assert all(r.trace is None and r.hit == (r.value >= 1.0) for r in readings)
+    assert sum(r.hit for r in readings) > 5
+    mox = make_world(seed=0, source="oven", warm_up=60.0, gas_sensor=MOXSensor())
+    raw = []
+    for j, stop in enumerate(tour.stops):  # the walk's own steps, without a rule
+        drive = float(np.linalg.norm(stop - tour.stops[j - 1])) if j else 0.0
+        if drive:
+            mox.advance(drive / config.speed)
+        raw.append(mox.sense_gas(stop))
+        mox.sense_wind(stop)
+    twin = make_world(seed=0, source="oven", warm_up=60.0, gas_sensor=MOXSensor())
+    walked = [r for _, _, r, _, _ in walk(twin, tour, config, camera=False)]
+    rule = HitRule("rise")
+    assert [rule.decide(r.trace) for r in raw] == [r.hit for r in walked]
+    with pytest.raises(ValueError, match="leaves the hit decision to the robot"):
+        visit(make_world(seed=0, warm_up=0.0, gas_sensor=MOXSensor()), tour.stops[0], tour.headings[0], config,
+              camera=False)
+
+
+def test_recording_a_world_whose_hits_the_robot_decides_is_refused_before_anything_is_written():
+    from psgsl_pgm.experiment._record import EpisodeRecorder
+
+    world = make_world(seed=0, warm_up=0.0, gas_sensor=MOXSensor())
+    with pytest.raises(ValueError, match="--record needs the world's thresholded GasSensor, got a MOXSensor"):
+        EpisodeRecorder().watch(world)
