@@ -84,11 +84,11 @@ def report(out: Path, results: dict, bench: dict, *, first_seed: int, seeds: int
         if p is None:
             continue
         d = p["rmst_difference"]
-        shift = d["value"] - base["rmst_difference"]["value"] if base is not None else float("nan")
-        if model.startswith("ideal+"):
+        shift = None if base is None else d["value"] - base["rmst_difference"]["value"]
+        if model.startswith("ideal+") and shift is not None:
             shifts[model] = shift
         lines.append(f"| {model} | {d['value']:.0f} [{d['ci95'][0]:.0f}, {d['ci95'][1]:.0f}] | {p['p_value']:.3g} | "
-                     f"{shift:+.0f} |")
+                     f"{'n/a' if shift is None else format(shift, '+.0f')} |")
     if shifts:
         top = max(shifts, key=lambda m: abs(shifts[m]))
         lines += ["", f"The component alone that moves the primary comparison most from the ideal world's: {top} "

@@ -68,8 +68,11 @@ class World:
 
     def __init__(self, house: House, wind: WindSequence, gas: FilamentModel, *, camera: Camera,
                  detector: DetectorModel, gas_sensor: GasSensor, anemometer: Anemometer, source_object=None,
-                 seed: int = 0, localisation: LocalisationError | None = None):
+                 seed: int = 0, localisation: LocalisationError | None = None, source=None):
         self.house = house
+        # the source as named (an object's centre or a given point); the gas may be released beside it, where the
+        # emitting object meets the air (make_world's gas_obstacles)
+        self._source = None if source is None else np.asarray(source, dtype=np.float64).copy()
         self.wind = wind
         self.gas = gas
         self.camera = camera
@@ -96,7 +99,9 @@ class World:
 
     @property
     def source(self) -> np.ndarray:
-        return self.gas.source.copy()
+        """(2,) the source position, m: the point named (the gas's release point unless the emitting object
+        blocks the air there, see :func:`make_world`'s ``gas_obstacles``)."""
+        return (self.gas.source if self._source is None else self._source).copy()
 
     @property
     def time(self) -> float:
@@ -313,6 +318,27 @@ def _source(house: House, source):
     return xy, object_at(house, xy)
 
 
+def _blocked_for_gas(house: House, obstacles, source):
+    """The gas's grid with ``obstacles`` as walls, and the release point: ``source``, or the centre of the nearest
+    cell of a room outside walls and obstacles when they hold it (ValueError when no such cell is within 1 m)."""
+    blocked = np.asarray(obstacles)
+    if blocked.shape != house.grid.shape or blocked.dtype != bool:
+        raise ValueError(f"gas_obstacles must be an (H, W) bool mask of the house's {house.grid.shape} grid, got "
+                         f"{blocked.dtype} {blocked.shape}")
+    grid = house.grid.with_occupancy(house.grid.occupancy | blocked)
+    if not grid.is_occupied(source):
+        return grid, source
+    from scipy import ndimage as ndi
+
+    rc = house.grid.world_to_cell(source)
+    dist, (ri, ci) = ndi.distance_transform_edt(grid.occupancy | (house.room_labels < 0), return_indices=True)
+    r, c = int(rc[0]), int(rc[1])
+    if dist[r, c] * house.grid.resolution > 1.0:
+        raise ValueError(f"source ({source[0]:g}, {source[1]:g}) lies more than 1 m inside the gas obstacles: no "
+                         "place where its object meets the air")
+    return grid, grid.cell_to_world(np.array([ri[r, c], ci[r, c]]))
+
+
 def object_at(house: House, xy):
     """The object whose footprint polygon holds the point ``xy`` (m), or None.
 
@@ -333,7 +359,8 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                perturbation: float = 0.3, params: FilamentParams | None = None, warm_up: float = 60.0,
                duration: float = 600.0, camera: Camera | None = None, detector: DetectorModel | None = None,
                gas_sensor=None, anemometer: Anemometer | None = None,
-               wind: WindSequence | None = None, localisation: LocalisationError | None = None) -> World:
+               wind: WindSequence | None = None, localisation: LocalisationError | None = None,
+               gas_obstacles=None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
 
     Parameters
@@ -364,6 +391,11 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         The robot's localisation error (default None: it is exactly where it believes, and the world draws
         nothing for it). Its offset has its own random stream, so the other streams draw the same numbers
         with and without it.
+    gas_obstacles : (H, W) array_like of bool, optional, keyword-only
+        Cells that block the gas as walls do, besides the walls: the furniture that blocks the air at the
+        sensor's height in a CFD wind (:func:`psgsl_pgm.sim._lbm.cfd_obstacles`), so that filaments go round
+        what the flow goes round. A source inside them releases its gas at the nearest cell outside them, where
+        the emitting object meets the air; :attr:`World.source` stays the point named. Default: walls only.
 
     Returns
     -------
@@ -391,7 +423,10 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                          duration=duration, seed=wind_seed)
     elif not isinstance(wind, WindSequence) or wind.grid.shape != house.grid.shape:
         raise ValueError(f"wind must be a WindSequence on the house's {house.grid.shape} grid, got {wind!r}")
-    gas = FilamentModel(house.grid, wind, source, params=params, outlet=house.outlet, seed=gas_seed)
+    gas_grid, release = house.grid, source
+    if gas_obstacles is not None:
+        gas_grid, release = _blocked_for_gas(house, gas_obstacles, source)
+    gas = FilamentModel(gas_grid, wind, release, params=params, outlet=house.outlet, seed=gas_seed)
     if gas_sensor is not None and not isinstance(gas_sensor, (GasSensor, MOXSensor, PIDSensor)):
         raise TypeError(f"gas_sensor must be a GasSensor, MOXSensor or PIDSensor, got {type(gas_sensor).__name__}")
     world = World(
@@ -403,6 +438,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         source_object=source_object,
         seed=seed,
         localisation=localisation,
+        source=None if gas_obstacles is None else source,
     )
     world.advance(warm_up)
     return world

@@ -11,7 +11,8 @@ The ``realistic`` world breaks each assumption with a model taken from outside t
 component     what changes
 ============  ==========================================================================================
 ``cfd-wind``  wind from a lattice Boltzmann CFD solve of the house (lbmpy): walls and tall furniture are
-              obstacles, the windows inlets and outlets (:func:`cfd_wind`; the ``cfd`` extra)
+              obstacles, the windows inlets and outlets (:func:`cfd_wind`; the ``cfd`` extra); the filaments
+              go round the same furniture, and a source inside it releases where its object meets the air
 ``mox``       a metal-oxide gas sensor with slow rise and slower recovery, noise and baseline drift
               (:class:`MOXSensor`), an anemometer with a datasheet's noise and offset
               (:meth:`Anemometer.datasheet`); the robot decides hits from the sensor's response
@@ -139,8 +140,11 @@ class WorldModel:
         if "cfd-wind" in self:
             from ._lbm import cfd_wind
 
+            from ._lbm import cfd_obstacles
+
             kwargs["wind"] = cfd_wind(house, speed=wind_speed, duration=CFD_DURATION, seed=CFD_SEED,
                                       cache_dir=cfd_cache)
+            kwargs["gas_obstacles"] = cfd_obstacles(house)  # the gas goes round what the flow goes round
         if "mox" in self:
             from ._mox import MOXSensor
             from ._sensors import Anemometer

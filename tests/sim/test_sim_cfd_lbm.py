@@ -182,3 +182,24 @@ def test_generated_home_ten_minutes_of_wind_carry_the_gas(seed, tmp_path):
     source = house.objects[0].class_name
     world = make_world(house, source=source, wind=wind, warm_up=60.0, seed=seed)
     assert world.gas.n_filaments > 100
+
+
+def test_filaments_go_round_the_furniture_that_blocks_the_flow(house_wind):
+    """With gas_obstacles the CFD's furniture blocks the filaments as walls do; the oven (inside a blocking
+    countertop) releases its gas at the nearest cell of a room outside them, and World.source stays the oven."""
+    house, _, wind = house_wind
+    obstacle = _lbm.cfd_obstacles(house)
+    world = make_world(house, wind=wind, warm_up=15.0, seed=1, gas_obstacles=obstacle)
+    oven = house.objects_of_class("oven")[0]
+    assert np.array_equal(world.source, oven.center)
+    release = world.gas.source
+    assert obstacle.ravel()[house.grid.world_to_cell(oven.center) @ (house.grid.shape[1], 1)]
+    rc = house.grid.world_to_cell(release)
+    assert not obstacle[rc[0], rc[1]] and house.room_labels[rc[0], rc[1]] >= 0
+    assert 0 < np.linalg.norm(release - oven.center) < 1.0
+    cells = house.grid.world_to_cell(world.gas.positions)
+    assert not obstacle[cells[:, 0], cells[:, 1]].any()  # no filament inside the blocking furniture
+    plain = make_world(house, wind=wind, warm_up=15.0, seed=1)
+    assert np.array_equal(plain.gas.source, oven.center)  # without: released at the oven's centre, as before
+    with pytest.raises(ValueError, match="gas_obstacles must be an"):
+        make_world(house, wind=wind, warm_up=0.0, gas_obstacles=obstacle[1:])

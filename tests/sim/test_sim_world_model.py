@@ -102,3 +102,29 @@ def test_cli_names_the_missing_solver_in_one_line(monkeypatch, tmp_path, capsys)
     assert code == 2 and len(err) == 1 and 'pip install "psgsl-pgm[cfd]"' in err[0]
     assert not out.exists()
     assert WorldModel.parse("ideal+mox+camera+pose").check_available() is None  # no solver without the CFD wind
+
+
+def test_each_component_puts_its_part_in_the_world():
+    from psgsl_pgm.sim import Anemometer, LocalisationError, MOXSensor
+
+    house = default_world().house(0)
+    kwargs = WorldModel.parse("ideal+mox+camera+pose").world_kwargs(house)
+    assert set(kwargs) == {"gas_sensor", "anemometer", "camera", "detector", "localisation"}
+    assert isinstance(kwargs["gas_sensor"], MOXSensor) and kwargs["anemometer"] == Anemometer.datasheet()
+    assert kwargs["camera"].occlusion == "furniture" and kwargs["detector"].correlated
+    assert isinstance(kwargs["localisation"], LocalisationError)
+    world = default_world().make_world(0, "oven", warm_up=2.0, model="ideal+mox+camera+pose")
+    assert world.detector_errors is not None and world.localisation is not None
+    assert world.sense_gas(world.source).hit is None  # the robot decides a MOX sensor's hits
+
+
+@pytest.mark.slow
+def test_the_realistic_world_runs_a_closed_loop_on_the_cfd_wind(tmp_path):
+    pytest.importorskip("lbmpy")
+    from psgsl_pgm.search import SearchConfig, run_closed_loop
+
+    config = ExperimentConfig(world_model="realistic")
+    run = run_closed_loop("oven", 0, "infotaxis", "semantics+rooms", config=config,
+                          search=SearchConfig(time_budget=120.0))
+    assert run.config["experiment"]["world_model"] == "realistic"
+    assert np.isfinite(run.error).all() and run.hit.dtype == bool
