@@ -15,6 +15,8 @@ process (not a test).
   driving and turning), gas readings (the sensor windows: their filament steps and concentration sums), camera
   frames, belief updates (p(s | g) and the class-belief map), posteriors (the variant's p(s | g, z) at each
   stop), decisions (φ_G + φ_O over the candidates) and the rest (shares of the wall time);
+* with ``--world-model`` (e.g. ``realistic``), the episode rows in that world (:class:`psgsl_pgm.sim.WorldModel`)
+  on the embedded house, its CFD wind solved and cached before the timed runs (each run still loads it);
 * with ``--house large``, the episode rows in a large generated home instead (:func:`psgsl_pgm.sim.generate_house`
   seed 101, 190 m², 136 × 140 cells; source the microwave; a home of the many-house benchmark's kind and size,
   not one of the generator's reference seeds): the same never-found 1000-s ``infotaxis/semantics+rooms``
@@ -32,7 +34,7 @@ Every episode row also gives the process CPU time (best of the runs), the measur
 shared machine. One core: run it as ``taskset -c 0 python benchmarks/bench_search.py``; the BLAS is limited to
 one thread here (threadpoolctl), as in the grid's workers. Run: ``python benchmarks/bench_search.py
 [--repeats 20] [--episodes 5] [--house {embedded,large}] [--no-episode] [--no-compile] [--homes 101,102,103]
-[--home-area 190] [--home-budget 300] [--only-homes]`` on an otherwise idle core (``--homes ''`` skips the homes).
+[--home-area 190] [--home-budget 300] [--only-homes] [--world-model realistic]`` on an otherwise idle core (``--homes ''`` skips the homes).
 """
 
 from __future__ import annotations
@@ -121,6 +123,9 @@ def main(argv=None):
     ap.add_argument("--home-area", type=float, default=190.0)
     ap.add_argument("--home-budget", type=float, default=300.0)
     ap.add_argument("--only-homes", action="store_true", help="skip everything but the homes' space-aware lines")
+    ap.add_argument("--world-model", default=None,
+                    help="the episode rows in this world model (psgsl_pgm.sim.WorldModel, e.g. realistic; its CFD "
+                    "wind solved and cached before the timed runs)")
     a = ap.parse_args(argv)
     try:
         from threadpoolctl import threadpool_limits
@@ -174,7 +179,18 @@ def main(argv=None):
     print(f"within the horizon only, warm: infotaxis {decision_near:.2f} ms, space-aware {sap_near:.2f} ms")
     if not a.no_episode:
         never = SearchConfig(found_radius=1e-3)
-        if a.house == "embedded":
+        if a.house == "embedded" and a.world_model is not None:
+            from psgsl_pgm.sim import default_world
+
+            model_config = ExperimentConfig(world_model=a.world_model)
+            t0 = time.perf_counter()
+            model_world = default_world().make_world(0, "oven", warm_up=config.warm_up, model=a.world_model)
+            print(f"world model {model_config.world_model}: world built in {time.perf_counter() - t0:.1f} s (the CFD "
+                  "wind solved or loaded from its cache)")
+            episodes = ((("oven", 0, "infotaxis", "semantics+rooms"),
+                         {"search": never, "space": FreeSpace(model_world.house, model_world.camera),
+                          "config": model_config}),)
+        elif a.house == "embedded":
             episodes = ((("oven", 0, "infotaxis", "semantics+rooms"), {"search": never, "space": space}),)
         else:
             from psgsl_pgm.sim import generate_house

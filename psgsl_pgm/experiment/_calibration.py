@@ -44,7 +44,7 @@ from ..olfaction import (
     profile_log_likelihood,
     score_tempering,
 )
-from ..sim import make_world
+from ..sim import default_world, make_world
 from ._config import ExperimentConfig, parse_source
 from ._robot_models import wind_basis
 from ._run import walk
@@ -101,14 +101,20 @@ class Calibration:
 
 def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> list:
     """The :class:`psgsl_pgm.olfaction.CalibrationRun` of each (seed, source): the tour's readings, and a plume
-    model carrying the mean wind estimated from that run's own anemometer readings."""
+    model carrying the mean wind estimated from that run's own anemometer readings. The runs are made in the
+    embedded house of ``config.world_model`` (the ideal world by default), the hits decided as the robot decides
+    them there (:func:`psgsl_pgm.experiment._run.walk`)."""
     config = ExperimentConfig() if config is None else config
     runs = list(runs)
     if not runs:
         raise ValueError("runs must name at least one (seed, source) calibration run")
     out = []
     for seed, source in runs:
-        world = make_world(seed=int(seed), source=parse_source(source), warm_up=config.warm_up)
+        if config.world_model in (None, "ideal"):
+            world = make_world(seed=int(seed), source=parse_source(source), warm_up=config.warm_up)
+        else:  # calibration runs made in the world the robot will search (its sensors, its wind)
+            world = default_world().make_world(int(seed), parse_source(source), warm_up=config.warm_up,
+                                               model=config.world_model)
         house = world.house
         wind = MeanWindEstimator(wind_basis(house), house.grid)
         positions, hits, winds = [], [], []
@@ -131,7 +137,8 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     runs : sequence of (int, str or (2,) array_like)
         (seed, source) pairs (default :data:`CALIBRATION_RUNS`).
     config : ExperimentConfig, optional, keyword-only
-        ε, warm-up and robot timing; its plume parameters and tempering are ignored.
+        ε, warm-up, robot timing and the world model the runs are made in; its plume parameters and tempering are
+        ignored.
     grid_runs : sequence of (int, str or (2,) array_like), or None, keyword-only
         The runs of :func:`parameter_grid_weights` (default :data:`GRID_CALIBRATION_RUNS`); ``None`` skips it.
     coverage_runs : sequence of (int, str or (2,) array_like), or None, keyword-only
