@@ -63,7 +63,8 @@ def _demo(args) -> int:
 
     check_output_dir(args.out, subdirs=("runs",))  # an unwritable --out fails now, not after the runs
     seeds = range(args.seeds) if args.seeds is not None else DEMO_SEEDS
-    print(f"psgsl demo: smoke from the kitchen oven of the simulated house, {len(seeds)} seeds, "
+    print(f"psgsl demo: smoke from the kitchen oven of the simulated house in the ideal world (built from the "
+          f"robot's own assumptions; psgsl search --world-model realistic breaks them), {len(seeds)} seeds, "
           f"{args.workers} workers -> {args.out}", flush=True)
     try:
         summary = run_demo(args.out, seeds=seeds, workers=args.workers, progress=not args.quiet)
