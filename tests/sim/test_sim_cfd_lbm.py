@@ -88,8 +88,17 @@ def test_second_call_loads_the_cache_without_solving(house_wind, monkeypatch):
         raise AssertionError("the solver ran although the result is cached")
 
     monkeypatch.setattr(_lbm, "_simulate", no_solver)
+    monkeypatch.setattr(_lbm, "_LAST", {})  # as in a new process: from the cache entry on disk
     again = cfd_wind(house, duration=20.0, seed=3, cache_dir=cache)
-    assert np.array_equal(again.velocities, wind.velocities)
+    assert np.array_equal(again.velocities, wind.velocities) and again is not wind
+
+    def no_load(*args, **kwargs):
+        raise AssertionError("the cache entry was read again")
+
+    monkeypatch.setattr(_lbm, "_load", no_load)  # the same process asks again: the flow it holds
+    assert cfd_wind(default_house(), duration=20.0, seed=3, cache_dir=cache) is again
+    monkeypatch.undo()
+    monkeypatch.setattr(_lbm, "_simulate", no_solver)
     with pytest.raises(AssertionError, match="solver ran"):  # another seed is another key
         cfd_wind(house, duration=20.0, seed=4, cache_dir=cache)
     with pytest.raises(AssertionError, match="solver ran"):  # another obstacle mask is another key
