@@ -208,7 +208,8 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         raise ValueError(f"conditions must include 'right-ontology' (the other conditions share its olfaction and "
                          f"tour runs and are compared with it), got {list(conditions)}")
     if set(policies) <= set(SEMANTICS_ALONE) and variants == ("olfaction",):
-        raise ValueError(f"policies {list(policies)} need a semantic variant; variants are ['olfaction'] only")
+        raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
+                         "['olfaction'] only")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
     off_rate = unit_interval(off_rate, "off_rate")

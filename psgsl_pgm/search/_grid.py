@@ -299,7 +299,8 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
                                                                            estimators)
                 if not (p in SEMANTICS_ALONE and v == "olfaction")]
         if not grid:
-            raise ValueError(f"policies {list(policies)} need a semantic variant; variants are ['olfaction'] only")
+            raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
+                             "['olfaction'] only")
     else:
         grid = [(parse_source(so), p, v, e, int(se)) for so, p, v, e, se in grid]
         for _, p, v, e, _ in grid:
