@@ -10,9 +10,9 @@ Layout of ``out``::
     report.md, summary.json, figures    (psgsl_pgm.search._bench_report)
 
 **Which runs.** For every seed s, house h and condition: every policy × variant, except that the ``tour`` runs
-with the first variant only (its path does not depend on the beliefs), ``semantic-modes`` only with semantic
-variants, and the ``olfaction`` variant and the ``tour`` only under ``right-ontology``: neither reads the
-robot's ontology (the olfactory posterior and the tour's path do not depend on it), so the other conditions
+with the first variant only (its path does not depend on the beliefs), ``semantic-modes`` and ``nearest-object``
+(semantics alone) only with semantic variants, and the ``olfaction`` variant and the ``tour`` only under
+``right-ontology``: neither reads the robot's ontology (the olfactory posterior and the tour's path do not depend on it), so the other conditions
 share those runs (the report says so). Jobs are submitted seed by seed, so that an interrupted grid leaves every
 house with about the same seeds.
 
@@ -38,7 +38,7 @@ from ..runs._key import digest, run_key, world_key
 from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sources, robot_ontology
 from ._grid import closed_loop_in_world
 from ._loop import SearchConfig
-from ._policies import POLICIES
+from ._policies import POLICIES, SEMANTICS_ALONE
 from ._split import benchmark_sample, check_split
 from ._store import read_run_key, write_search_run
 
@@ -55,7 +55,7 @@ def benchmark_arms(policies, variants, condition: str) -> list:
     out = []
     for p in policies:
         for v in (variants[:1] if p == "tour" else variants):
-            if p == "semantic-modes" and v == "olfaction":
+            if p in SEMANTICS_ALONE and v == "olfaction":
                 continue
             if condition != "right-ontology" and (p == "tour" or v == "olfaction"):
                 continue
@@ -207,8 +207,9 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     if "right-ontology" not in conditions:
         raise ValueError(f"conditions must include 'right-ontology' (the other conditions share its olfaction and "
                          f"tour runs and are compared with it), got {list(conditions)}")
-    if policies == ("semantic-modes",) and variants == ("olfaction",):
-        raise ValueError("policy 'semantic-modes' needs a semantic variant; variants are ['olfaction'] only")
+    if set(policies) <= set(SEMANTICS_ALONE) and variants == ("olfaction",):
+        raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
+                         "['olfaction'] only")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
     off_rate = unit_interval(off_rate, "off_rate")

@@ -19,7 +19,7 @@ from ..runs._key import digest, run_key, world_key
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import wilson_interval
 from ._split import split_of_seeds
-from ._policies import POLICIES
+from ._policies import POLICIES, SEMANTICS_ALONE, check_semantics_alone
 from ._store import load_search_run, read_run_key, search_run_path, write_search_run
 from ._survival import holm, kaplan_meier, km_median, paired_comparison, rmst
 
@@ -297,17 +297,17 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     if grid is None:  # semantics alone has no olfaction variant: that pair is left out
         grid = [(so, p, v, e, se) for se, so, p, v, e in itertools.product(seeds, sources, policies, variants,
                                                                            estimators)
-                if not (p == "semantic-modes" and v == "olfaction")]
+                if not (p in SEMANTICS_ALONE and v == "olfaction")]
         if not grid:
-            raise ValueError("policy 'semantic-modes' needs a semantic variant; variants are ['olfaction'] only")
+            raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
+                             "['olfaction'] only")
     else:
         grid = [(parse_source(so), p, v, e, int(se)) for so, p, v, e, se in grid]
         for _, p, v, e, _ in grid:
             if p not in POLICIES or v not in VARIANTS or e not in ESTIMATORS:
                 raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
                                  f"estimator of {ESTIMATORS}, got {(p, v, e)}")
-            if p == "semantic-modes" and v == "olfaction":
-                raise ValueError("grid entries: policy 'semantic-modes' needs a semantic variant, got 'olfaction'")
+            check_semantics_alone(p, v, where="grid entries: ")
     world = None if world is None else str(Path(world).resolve())
     world_part = world_key(world)
     world_digest = digest(world_part)

@@ -55,7 +55,7 @@ from ..experiment._step import VariantPosteriors, robot_hit_rule, start_run, vis
 from ..experiment._tour import exploration_tour
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
-from ._policies import POLICIES, Situation, check_score, choose
+from ._policies import POLICIES, Situation, check_score, check_semantics_alone, choose
 from ._space import FreeSpace
 
 __all__ = ["SearchConfig", "SearchRun", "run_closed_loop"]
@@ -240,7 +240,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         :func:`psgsl_pgm.experiment.parse_source`.
     seed : int
         World seed (house jitter, wind, gas, sensors, detector).
-    policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes"}
+    policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object"}
     variant : {"olfaction", "semantics", "semantics+rooms"}
         Which posterior the robot uses (the experiment's code path for it).
     estimator : {"infotaxis", "pmfs"}
@@ -271,8 +271,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
-    if policy == "semantic-modes" and variant == "olfaction":
-        raise ValueError("policy 'semantic-modes' (semantics alone, no gas) needs a semantic variant, got 'olfaction'")
+    check_semantics_alone(policy, variant)
     config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
     if recorder is not None:
         world = recorder.watch(world)

@@ -80,6 +80,25 @@ moves (:meth:`FreeSpace.candidates`).
   MAP cell, but to the drivable cell nearest the mode once it is within the horizon (not only to the lattice).
   Once the robot has passed a mode without finding the source, the factors rule it out and the next mode becomes
   the target: the robot visits the modes of the semantic term in turn. Needs a semantic variant.
+* ``nearest-object`` — the baseline a practitioner writes first, semantics alone and no gas: visit the objects
+  of the robot's map one after another, each time the one of highest probability of finding the source there
+  per second of travel (:func:`object_scores`). The objects are the footprints the robot's map segments its
+  furniture into (the found regions of :class:`DetectionModel`; their classes are unknown to the robot); the
+  value of object j is P_f(j) = (1 − m) Σ_{c ∈ j} p(s = c | z, F̄), with p(s | z, F̄) the normalised
+  ``semantic-modes`` score p(s | z) p(s) P(F̄ | s). Through eq. ``prob-semantics-final`` the semantic term is
+  Σ_i p(o_ci | z_c) p(o_i | s, γ)/p(o_i) with the class beliefs of the room map: before any frame
+  p(o | z, room) = p(o | room), so the value is the footprint's sum of p(o | s, γ) p(o | room)/p(o), and as
+  frames arrive the detector's evidence about what stands there replaces the room's guess; the "not found"
+  factors rule out an object once passed. The cost is the travel time τ_j = d_j/v + t_sense (:func:`travel_time`,
+  no turn: the camera faces the object on arrival), d_j the geodesic distance to the nearest drivable cell within
+  r of the footprint, where the robot finds a source there; the score is P_f(j)/τ_j (:func:`score_per_time`).
+  Why the ratio: for boxes searched with certain detection at fixed costs, visiting in decreasing order of p/c
+  minimises the expected time to find (swapping adjacent visits i, j changes it by p_j c_i − p_i c_j; Kadane &
+  Simon 1977, Ann. Statist. 5:237–255); here the costs depend on where the robot stands, so the rule is applied
+  greedily at every stop. Neither the most probable object (ignores the drive) nor the nearest (ignores the
+  semantics). The robot drives to that cell directly when it is within the horizon, else towards it as
+  ``greedy``, re-planning at every stop; ties go to the first object in the map's order. With no object left
+  (every footprint ruled out, or none in the map) it goes on as ``semantic-modes``. Needs a semantic variant.
 * ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
 """
 
@@ -93,11 +112,13 @@ from scipy.special import entr
 from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
 
-__all__ = ["Decision", "POLICIES", "SCORES", "Situation", "check_score", "choose", "olfactory_gain", "score_per_time",
-           "semantic_mode", "travel_time"]
+__all__ = ["Decision", "POLICIES", "SCORES", "SEMANTICS_ALONE", "Situation", "check_score", "check_semantics_alone",
+           "choose", "object_scores", "olfactory_gain", "score_per_time", "semantic_mode", "travel_time"]
 
 #: Policies of the closed loop.
-POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes")
+POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object")
+#: Policies that read the semantic term alone, no gas: they need a semantic variant.
+SEMANTICS_ALONE = ("semantic-modes", "nearest-object")
 #: Rules that turn a pose's gain G and time τ into its score (module docstring).
 SCORES = ("per-time", "gain")
 
@@ -178,6 +199,14 @@ def score_per_time(gain, tau) -> np.ndarray:
     if np.any(tau <= 0):
         raise ValueError("travel times must be positive")
     return np.where(gain > 0, gain / tau, gain * tau)
+
+
+def check_semantics_alone(policy: str, variant: str, *, where: str = "") -> None:
+    """ValueError when ``policy`` reads semantics alone (:data:`SEMANTICS_ALONE`) and ``variant`` is
+    ``olfaction``, which has no semantic term; ``where`` prefixes the message (e.g. ``"grid entries: "``)."""
+    if policy in SEMANTICS_ALONE and variant == "olfaction":
+        raise ValueError(f"{where}policy {policy!r} (semantics alone, no gas) needs a semantic variant "
+                         f"('semantics' or 'semantics+rooms'), got 'olfaction'")
 
 
 def check_score(value) -> str:
@@ -782,15 +811,19 @@ def _towards(sit: Situation, target: int) -> Decision:
                     float(-d_target[k]))
 
 
+def _semantic_log_score(sit: Situation, policy: str) -> np.ndarray:
+    """(H, W) log p(s | z) + log p(s) + log P(F̄ | s), the unnormalised log of p(s | z, F̄) for the situation's
+    semantic variant (module docstring): no gas reading enters it. ValueError naming ``policy`` for ``olfaction``."""
+    check_semantics_alone(policy, sit.variant)
+    est = sit.beliefs.estimator
+    with np.errstate(divide="ignore"):
+        return np.log(sit.beliefs.semantic(sit.variant)) + np.log(est.prior) + est.log_conditioning
+
+
 def semantic_mode(sit: Situation) -> int:
     """Flat index of the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s) for the situation's semantic variant (the
     ``semantic-modes`` policy, module docstring): no gas reading enters it. First maximum on ties."""
-    if sit.variant == "olfaction":
-        raise ValueError("policy 'semantic-modes' needs a semantic variant ('semantics' or 'semantics+rooms'), "
-                         "got 'olfaction'")
-    est = sit.beliefs.estimator
-    with np.errstate(divide="ignore"):
-        score = np.log(sit.beliefs.semantic(sit.variant)) + np.log(est.prior) + est.log_conditioning
+    score = _semantic_log_score(sit, "semantic-modes")
     skip = sit.cache.get(_STUCK)
     if skip is not None:
         score.ravel()[skip] = -np.inf
@@ -822,12 +855,84 @@ def _semantic_step(sit: Situation) -> Decision:
     return _towards(sit, goal)
 
 
+def _object_finders(sit: Situation):
+    """(pairs,) flat drivable cells and (pairs,) object indices: every drivable cell within r of each footprint of
+    the detection model (where the robot finds a source in that object), sorted by object then cell; cached for
+    the run with the model it was computed for."""
+    model = _detection(sit)
+    hit = sit.cache.get("nearest-object: finders")
+    if hit is None or hit[0] is not model:
+        nav = np.flatnonzero(sit.space.nav.ravel())
+        near = model.near_footprints(sit.space.centres[nav])  # (n_nav, J): the rule's own comparison
+        obj, k = np.nonzero(near.T)
+        hit = sit.cache["nearest-object: finders"] = (model, nav[k], obj)
+    return hit[1], hit[2]
+
+
+def object_scores(sit: Situation):
+    """The ``nearest-object`` scores of every object of the robot's map (module docstring).
+
+    Returns
+    -------
+    score : (J,) ndarray
+        P_f(j)/τ_j, 1/s; 0 for an object of no mass or out of reach.
+    value : (J,) ndarray
+        P_f(j) = (1 − m) Σ_{c ∈ j} p(s = c | z, F̄), the probability of finding the source at object j.
+    tau : (J,) ndarray
+        s, travel time to the nearest drivable cell that finds object j (inf when none is reachable).
+    goal : (J,) ndarray of int
+        That cell (flat; −1 when none is reachable); the lowest flat index among equally near cells.
+
+    ValueError for the ``olfaction`` variant.
+    """
+    model = _detection(sit)
+    log_score = _semantic_log_score(sit, "nearest-object").ravel()
+    top = np.max(log_score)
+    p = np.exp(log_score - top) if np.isfinite(top) else np.zeros(log_score.size)
+    p = p / p.sum() if p.sum() > 0 else p
+    n_obj = len(model.footprints)
+    owned = model.owner >= 0
+    value = (1.0 - model.miss_probability) * np.bincount(model.owner[owned], weights=p[owned], minlength=n_obj)
+    cells, obj = _object_finders(sit)
+    dist = sit.space.distances(sit.cell)[cells]
+    d = np.full(n_obj, np.inf)
+    np.minimum.at(d, obj, dist)
+    goal = np.full(n_obj, -1, dtype=np.int64)
+    at = np.isfinite(dist) & (dist == d[obj])
+    first = np.flatnonzero(at)[np.unique(obj[at], return_index=True)[1]]  # first (lowest cell) of each object
+    goal[obj[first]] = cells[first]
+    tau = travel_time(d, 0.0, speed=sit.speed, turn_time=sit.turn_time, sense_time=sit.sense_time)
+    score = np.where(np.isfinite(tau) & (value > 0), score_per_time(value, np.where(np.isfinite(tau), tau, 1.0)),
+                     0.0)
+    return score, value, tau, goal
+
+
+def _nearest_object_step(sit: Situation) -> Decision:
+    """``nearest-object``: to the finder cell of the best-scoring object (first maximum), directly within the
+    horizon, else towards it as ``greedy``; with no object of positive score, as ``semantic-modes``."""
+    score = object_scores(sit)
+    if not np.any(score[0] > 0):
+        return _semantic_step(sit)
+    j = int(np.argmax(score[0]))
+    goal = int(score[3][j])
+    space = sit.space
+    model = _detection(sit)
+    to = space.centres[model.footprints[j]].mean(axis=0) - space.position(goal)  # the camera faces the object
+    heading = float(np.arctan2(to[1], to[0])) if np.hypot(*to) > 0 else sit.heading
+    dist, pred = space.reach(sit.cell, sit.horizon)
+    if np.isfinite(dist[goal]):
+        return Decision(goal, (heading,), space.path(pred, goal), float(dist[goal]), float(score[0][j]))
+    return _towards(sit, goal)
+
+
 def choose(policy: str, sit: Situation) -> Decision:
     """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
     if policy == "greedy":
         return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell
     if policy == "semantic-modes":
         return _semantic_step(sit)
+    if policy == "nearest-object":
+        return _nearest_object_step(sit)
     if policy == "infotaxis":
         return _choose_infotaxis(sit)
     if policy == "space-aware-infotaxis":

@@ -19,6 +19,7 @@ from psgsl_pgm.cli._main import main
     (["--rooms", "8", "--area", "50"], "per room"),
     (["--room-types", "Kitchen", "Garage", "Bedroom"], "room_types must name types"),
     (["--policies", "teleport"], "policies must be among"),
+    (["--policies", "nearest-object", "--variants", "olfaction"], "needs a semantic variant"),
     (["--variants", "smell"], "variants must be among"),
     (["--conditions", "no-rooms"], "must include 'right-ontology'"),
     (["--off-rate", "1.5"], "off_rate"),
@@ -153,3 +154,12 @@ def test_the_test_split_runs_test_homes_and_seeds_and_records_it(tmp_path, capsy
     assert summary["settings"]["split"] == "test" and summary["settings"]["houses"] == ["h10000"]
     assert summary["settings"]["seeds"] == [20000]
     assert "Split: **test**" in (out / "report.md").read_text()
+
+
+def test_the_nearest_object_baseline_runs_in_the_benchmark(tmp_path):
+    out = tmp_path / "b"
+    assert main(["benchmark", "--houses", "1", "--seeds", "1", "--rooms", "3", "--area", "45", "--policies",
+                 "nearest-object", "--variants", "olfaction", "semantics+rooms", "--conditions", "right-ontology",
+                 "--budget", "40", "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    runs = sorted(p.name for p in (out / "runs").iterdir())
+    assert runs == ["h00000__right-ontology__nearest-object__semantics+rooms__infotaxis__seed0.npz"]
