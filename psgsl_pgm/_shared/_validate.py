@@ -33,6 +33,7 @@ import numpy as np
 
 __all__ = [
     "did_you_mean",
+    "one_of",
     "SUM_RTOL",
     "as_array",
     "as_float_array",
@@ -452,6 +453,22 @@ def cell_distribution(x, name: str, cell_shape: tuple, *, like: str) -> np.ndarr
                          f"{describe(arr)}")
     check_distribution(arr.reshape(-1), name, sums=np.sum(arr, dtype=np.float64))
     return arr
+
+
+def one_of(value, name: str, allowed: tuple) -> str:
+    """``value`` if it is one of the names ``allowed``; TypeError for a non-string, ValueError (with the closest
+    names) for an unknown one, both naming ``allowed``.
+
+    Examples
+    --------
+    >>> one_of("dev", "split", ("dev", "test"))
+    'dev'
+    """
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be one of {allowed}, got {type(value).__name__} {value!r}")
+    if value not in allowed:
+        raise ValueError(f"{name} must be one of {allowed}, got {value!r}{did_you_mean(value, allowed)}")
+    return value
 
 
 def did_you_mean(name: str, known) -> str:

@@ -44,7 +44,7 @@ from ..olfaction import (
     profile_log_likelihood,
     score_tempering,
 )
-from ..sim import default_world, make_world
+from ..sim import default_world
 from ._config import ExperimentConfig, parse_source
 from ._robot_models import wind_basis
 from ._run import walk
@@ -110,11 +110,9 @@ def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None =
         raise ValueError("runs must name at least one (seed, source) calibration run")
     out = []
     for seed, source in runs:
-        if config.world_model in (None, "ideal"):
-            world = make_world(seed=int(seed), source=parse_source(source), warm_up=config.warm_up)
-        else:  # calibration runs made in the world the robot will search (its sensors, its wind)
-            world = default_world().make_world(int(seed), parse_source(source), warm_up=config.warm_up,
-                                               model=config.world_model)
+        # made in the world the robot will search (its sensors, its wind)
+        world = default_world().make_world(int(seed), parse_source(source), warm_up=config.warm_up,
+                                           model=config.world_model)
         house = world.house
         wind = MeanWindEstimator(wind_basis(house), house.grid)
         positions, hits, winds = [], [], []

@@ -210,7 +210,7 @@ class VariantPosteriors:
         # its world takes them (occluding, with persistent errors, in a world whose model has the camera)
         from ..sim._world_model import WorldModel
 
-        own_camera = "camera" in WorldModel.parse(config.world_model or getattr(setting, "model", "ideal"))
+        own_camera = "camera" in WorldModel.parse(config.world_model or setting.model)
         self.detector_model = robot_detector_model(classes, realistic=own_camera) \
             if config.detector_model == "estimated" else None
         self.estimator = make_estimator(estimator, self.model, config,

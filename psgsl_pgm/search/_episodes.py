@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
+from .._shared._validate import one_of
 from ..core._ontology import Ontology
 from ..sim._classes import OTHER
 
@@ -42,13 +43,7 @@ _WRONG_TAG = 0x3A0
 
 def check_condition(condition) -> str:
     """``condition`` if it is one of :data:`CONDITIONS`; ValueError (TypeError) naming them otherwise."""
-    if not isinstance(condition, str):
-        raise TypeError(f"condition must be one of {CONDITIONS}, got {type(condition).__name__} {condition!r}")
-    if condition not in CONDITIONS:
-        from .._shared._validate import did_you_mean
-
-        raise ValueError(f"condition must be one of {CONDITIONS}, got {condition!r}{did_you_mean(condition, CONDITIONS)}")
-    return condition
+    return one_of(condition, "condition", CONDITIONS)
 
 
 def _derangement(rng, n: int) -> np.ndarray:

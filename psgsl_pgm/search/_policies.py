@@ -109,6 +109,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import entr
 
+from .._shared._validate import one_of
 from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
 
@@ -211,11 +212,7 @@ def check_semantics_alone(policy: str, variant: str, *, where: str = "") -> None
 
 def check_score(value) -> str:
     """``value`` if it names a scoring rule of :data:`SCORES`; TypeError or ValueError naming them otherwise."""
-    if not isinstance(value, str):
-        raise TypeError(f"score must be one of {SCORES}, got {type(value).__name__}")
-    if value not in SCORES:
-        raise ValueError(f"score must be one of {SCORES}, got {value!r}")
-    return value
+    return one_of(value, "score", SCORES)
 
 
 def _score(sit: Situation, gain, tau) -> np.ndarray:

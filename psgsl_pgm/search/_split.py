@@ -29,6 +29,8 @@ Examples
 
 from __future__ import annotations
 
+from .._shared._validate import one_of
+
 __all__ = ["BENCHMARK_TEST_SEEDS", "SPLITS", "TEST_HOMES", "TEST_SEEDS", "benchmark_sample", "check_split",
            "house_seeds", "split_of_seeds"]
 
@@ -44,11 +46,7 @@ BENCHMARK_TEST_SEEDS = 5
 
 def check_split(split) -> str:
     """``split`` if it is one of :data:`SPLITS`; ValueError (TypeError) naming them otherwise."""
-    if not isinstance(split, str):
-        raise TypeError(f"split must be one of {SPLITS}, got {type(split).__name__} {split!r}")
-    if split not in SPLITS:
-        raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
-    return split
+    return one_of(split, "split", SPLITS)
 
 
 def _count(value, name: str, default: int, maximum: int | None = None) -> int:
