@@ -176,7 +176,8 @@ def _run(args) -> int:
                                     world=args.world, record=args.record)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
-    print(f"split {args.split}: seeds {seeds.start}-{seeds.stop - 1}")
+    model = config.world_model or (spec.model if spec is not None else "ideal")
+    print(f"split {args.split}: seeds {seeds.start}-{seeds.stop - 1}; world model {model}")
     for key, summary in summaries.items():
         print(f"source/estimator {key}")
         print(format_search_table(summary))

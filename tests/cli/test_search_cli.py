@@ -147,7 +147,7 @@ def test_the_test_split_runs_its_own_seeds_and_says_so(tmp_path, capsys):
     argv = ["search", "--sources", "oven", "--policies", "tour", "--variants", "olfaction", "--seeds", "2",
             "--budget", "5", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
     assert main(argv + ["--split", "test"]) == 0
-    assert "split test: seeds 20000-20001" in capsys.readouterr().out
+    assert "split test: seeds 20000-20001; world model ideal" in capsys.readouterr().out
     s = json.loads((out / "summary.json").read_text())["oven/infotaxis"]["tour/olfaction"]
     assert s["seeds"] == [20000, 20001] and s["split"] == "test"
     dev = tmp_path / "d"
