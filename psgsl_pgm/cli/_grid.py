@@ -163,6 +163,15 @@ def add_found_arguments(parser) -> None:
                         "(default: the world file's 'clearance', else 0.25)")
 
 
+def add_end_argument(parser) -> None:
+    """``--end``, shared by ``psgsl search`` and ``psgsl benchmark``: how a closed-loop run ends
+    (:class:`psgsl_pgm.search.SearchConfig` ``end``)."""
+    parser.add_argument("--end", choices=("declare", "reach"), default="declare",
+                        help="declare: a run ends at the robot's first declaration, a success when within 1 m of the "
+                        "source; reach: when the robot first passes within the found radius of the source (the rule "
+                        "of earlier results) (default: %(default)s)")
+
+
 def add_world_arguments(parser) -> None:
     """``--world`` and ``--sources``, shared by ``psgsl experiment`` and ``psgsl search`` (read by
     :func:`world_sources`)."""
