@@ -9,6 +9,7 @@ from pathlib import Path
 from ._grid import (
     MAX_SEEDS,
     add_end_argument,
+    add_split_arguments,
     add_found_arguments,
     add_missed_hits_argument,
     missed_hit_rate,
@@ -17,11 +18,11 @@ from ._grid import (
     add_workers_argument,
     add_world_arguments,
     add_world_model_argument,
+    split_seeds,
     interrupted,
     positive_float,
     positive_int,
     seed_count,
-    seed_range,
     world_model,
     world_sources,
 )
@@ -40,21 +41,15 @@ def add_parser(subparsers):
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
     add_world_arguments(p)
-    p.add_argument("--policies", nargs="+", choices=POLICIES, default=["tour", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object"],
+    p.add_argument("--policies", nargs="+", choices=POLICIES,
+                   default=["tour", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object"],
                    help="policies; the semantics-alone baselines semantic-modes and nearest-object run only with "
                    "semantic variants (default: %(default)s)")
     p.add_argument("--variants", nargs="+", choices=VARIANTS, default=["olfaction", "semantics+rooms"],
                    help="information variants (default: %(default)s)")
     p.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis"],
                    help="olfactory estimators (default: %(default)s)")
-    p.add_argument("--split", choices=SPLITS, default="dev",
-                   help=f"development seeds (dev: N..N+S-1) or the test seeds, run once per release (test: "
-                   f"{TEST_SEEDS.start}-{TEST_SEEDS.stop - 1}; no --first-seed) (default: %(default)s)")
-    p.add_argument("--seeds", type=seed_count, default=None,
-                   help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: 10; with --split test "
-                   f"the first S test seeds, default all {len(TEST_SEEDS)})")
-    p.add_argument("--first-seed", default=None, metavar="N",
-                   help="first seed N of the dev split, an integer >= 0 (default: 0)")
+    add_split_arguments(p)
     p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
     p.add_argument("--score", choices=SCORES, default="per-time",
@@ -132,16 +127,6 @@ def format_search_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def _seeds(args) -> range:
-    """The seeds of ``--split``, ``--seeds`` and ``--first-seed`` (:func:`psgsl_pgm.search._split.house_seeds`)."""
-    from ..search._split import house_seeds
-
-    if args.split == "test":
-        return house_seeds("test", seeds=args.seeds, first_seed=args.first_seed)
-    seeds = seed_range("0" if args.first_seed is None else args.first_seed, 10 if args.seeds is None else args.seeds)
-    return house_seeds("dev", seeds=len(seeds), first_seed=seeds.start)
-
-
 def run(args) -> int:
     """Run ``psgsl search``; returns the exit code (bad input: one line on stderr, exit 2)."""
     from ._usage import reporting_usage_errors
@@ -159,7 +144,7 @@ def _run(args) -> int:
 
     # a bad --first-seed, a test split with --first-seed or too many seeds, dev seeds in the test set: one line,
     # exit 2, nothing written
-    seeds = _seeds(args)
+    seeds = split_seeds(args)
     spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(off_ontology=args.off_ontology, missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
