@@ -39,6 +39,7 @@ from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sourc
 from ._grid import closed_loop_in_world
 from ._loop import SearchConfig
 from ._policies import POLICIES, SEMANTICS_ALONE
+from ._reactive import REACTIVE
 from ._split import benchmark_sample, check_split
 from ._store import read_run_key, write_search_run
 
@@ -55,7 +56,7 @@ def benchmark_arms(policies, variants, condition: str) -> list:
     out = []
     for p in policies:
         for v in (variants[:1] if p == "tour" else variants):
-            if p in SEMANTICS_ALONE and v == "olfaction":
+            if (p in SEMANTICS_ALONE and v == "olfaction") or (p in REACTIVE and v != "olfaction"):
                 continue
             if condition != "right-ontology" and (p == "tour" or v == "olfaction"):
                 continue
