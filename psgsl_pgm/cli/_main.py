@@ -234,8 +234,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
     exp.add_argument("--first-seed", default="0", metavar="N",
                      help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
-    exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
-                     help="olfactory estimators (default: both)")
+    exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis", "pmfs"],
+                     help="olfactory estimators (default: %(default)s)")
     add_ontology_argument(exp)
     add_missed_hits_argument(exp)
     add_world_model_argument(exp)

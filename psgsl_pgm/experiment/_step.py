@@ -24,7 +24,7 @@ from ..core._beliefs import room_evidence, update_class_probs
 from ..core._class_beliefs import ClassBeliefMap
 from ..core._fusion import fuse
 from ..core._semantic import semantic_source_probability
-from ..olfaction import GridInfotaxis, MeanWindEstimator, PlumeModel, PMFSEstimator
+from ..olfaction import GridInfotaxis, MeanWindEstimator, ParticleFilter, PlumeModel, PMFSEstimator
 from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._robot_models import robot_detector_model, robot_hit_rule, wind_basis
@@ -90,6 +90,9 @@ def make_estimator(name, model, config, *, prior=None):
                                         parameter_grid=config.parameter_grid)
     if name == "pmfs":
         return PMFSEstimator.from_model(model, prior=prior, tempering=config.pmfs_tempering)
+    if name == "particle-filter":
+        return ParticleFilter.from_model(model, prior=prior, tempering=config.tempering,
+                                         false_hit_rate=config.false_hit_rate)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 
