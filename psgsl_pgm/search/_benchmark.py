@@ -211,6 +211,9 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     if set(policies) <= set(SEMANTICS_ALONE) and variants == ("olfaction",):
         raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
                          "['olfaction'] only")
+    if set(policies) <= set(REACTIVE) and "olfaction" not in variants:
+        raise ValueError(f"policies {list(policies)}: reactive policies run with variant 'olfaction' only; variants "
+                         f"are {list(variants)}")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
     off_rate = unit_interval(off_rate, "off_rate")

@@ -148,6 +148,24 @@ def test_cli_refuses_a_reactive_policy_with_only_semantic_variants(tmp_path, cap
     assert "invalid choice: 'zigzag'" in capsys.readouterr().err and not (tmp_path / "out").exists()
 
 
+def test_a_search_grid_runs_reactive_policies_with_olfaction_only(tmp_path):
+    from psgsl_pgm.search import run_search_grid
+
+    summary = run_search_grid(["oven"], ["surge-cast", "spiral"], ["olfaction", "semantics+rooms"], ["infotaxis"], [0],
+                              out=tmp_path / "out", search=_short(), figures=False, progress=False, workers=1)
+    runs = sorted(p.name for p in (tmp_path / "out" / "runs").iterdir())
+    assert len(runs) == 2 and all("olfaction" in r and "semantics" not in r for r in runs), runs
+    assert summary
+
+
+def test_the_benchmark_refuses_reactive_policies_without_the_olfaction_variant(tmp_path):
+    from psgsl_pgm.search import run_benchmark
+
+    with pytest.raises(ValueError, match="'olfaction' only"):
+        run_benchmark(out=tmp_path / "b", policies=("spiral",), variants=("semantics+rooms",))
+    assert not (tmp_path / "b").exists()
+
+
 def test_surge_cast_in_the_house_runs_on_the_robot_s_readings_only():
     run = run_closed_loop("oven", 0, "surge-cast", "olfaction", search=_short())
     assert run.policy == "surge-cast" and run.n_steps > 5
