@@ -67,7 +67,8 @@ def test_surge_cast_reaches_the_source_of_a_plume_in_uniform_wind(open_room):
 
 
 def test_spiral_alone_stays_near_the_start_in_the_same_budget(open_room):
-    # the control: without upwind surges the same 80 stops find the source in none of the runs
+    # the control: without upwind surges the same 80 stops find the source in none of the runs (the spiral does find
+    # it in 2 of 6 such runs within 400 stops: hits re-centre it, more often nearer the source)
     found = [_search(open_room, "spiral", seed)[0] for seed in range(4)]
     assert found == [None] * 4
 
