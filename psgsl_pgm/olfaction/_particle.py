@@ -128,7 +128,7 @@ class ParticleFilter(OlfactoryEstimator):
         return float(self._w @ np.exp(self._logq))
 
     def _rng(self, tag: int) -> np.random.Generator:
-        return np.random.default_rng([self.seed, len(self._events), tag])
+        return np.random.default_rng([self.seed, 0x9A27, len(self._events), tag])  # the filter's own streams
 
     def _cells(self, x) -> np.ndarray:
         """Flat cell of each point (−1 off the map)."""

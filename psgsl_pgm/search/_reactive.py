@@ -15,8 +15,8 @@ on that cell; the next one follows.
 
   .. math:: \mathbf x(\theta) = \mathbf c + \frac{b\,\theta}{2\pi}\,(\cos\theta, \sin\theta),
 
-  consecutive ones :data:`STEP` apart in arc length (s(θ) = a/2 (θ √(1 + θ²) + asinh θ), a = b/2π), b = :data:`GAP`
-  the distance between turns, starting at the robot's start. A hit re-centres the spiral on the stop where it was
+  consecutive ones :data:`STEP` apart in arc length (s(θ) = a/2 (θ √(1 + θ²) + asinh θ), a = b/2π),
+  b = :data:`GAP` the distance between turns, starting at the robot's start. A hit re-centres the spiral on the stop where it was
   read (θ = 0): the next turns circle the place where the plume was met, widening until the next hit. Once the
   radius passes the map's diagonal the spiral starts again from its centre.
 * ``surge-cast`` — the moth's upwind surge and crosswind cast (Kennedy & Marsh 1974, Science 184:999–1001;
@@ -99,7 +99,7 @@ class _Spiral:
         return GAP / (4 * np.pi) * (theta * np.hypot(1.0, theta) + np.arcsinh(theta))
 
     def advance(self) -> None:
-        """θ of the point :data:`STEP` further along the spiral (Newton on the arc length, ds/dθ = a √(1 + θ²))."""
+        """θ of the point :data:`STEP` further along the spiral (Newton on s(θ), ds/dθ = a √(1 + θ²))."""
         target = self.arc(self.theta) + STEP
         theta = self.theta + STEP / (GAP / (2 * np.pi) * np.hypot(1.0, self.theta))
         for _ in range(50):
