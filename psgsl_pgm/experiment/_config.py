@@ -16,7 +16,7 @@ __all__ = ["ESTIMATORS", "ExperimentConfig", "PARAMETER_GRID", "VARIANTS", "pars
 VARIANTS = ("olfaction", "semantics", "semantics+rooms")
 
 #: Olfactory estimators p(s | g) the experiment can run.
-ESTIMATORS = ("infotaxis", "pmfs")
+ESTIMATORS = ("infotaxis", "pmfs", "particle-filter")
 
 #: (D m²/s, τ s, κ m²/s, weight) of the plume parameters marginalised by the grid Infotaxis estimator
 #: (:attr:`ExperimentConfig.parameter_grid`), fitted by :func:`psgsl_pgm.experiment.calibrate`.

@@ -128,7 +128,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     tour = exploration_tour(house, start=setting.start_for(house)) if tour is None else tour
     if config.stops is not None and config.stops < len(tour):
         tour = tour.first(config.stops)
-    beliefs = VariantPosteriors(world, estimator, config, setting=setting)  # shared with the closed loop
+    beliefs = VariantPosteriors(world, estimator, config, setting=setting, seed=int(seed))  # as the closed loop
     centres = house.grid.cell_centres()
     truth = world.source
 

@@ -24,7 +24,7 @@ from ..core._beliefs import room_evidence, update_class_probs
 from ..core._class_beliefs import ClassBeliefMap
 from ..core._fusion import fuse
 from ..core._semantic import semantic_source_probability
-from ..olfaction import GridInfotaxis, MeanWindEstimator, PlumeModel, PMFSEstimator
+from ..olfaction import GridInfotaxis, MeanWindEstimator, ParticleFilter, PlumeModel, PMFSEstimator
 from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._robot_models import robot_detector_model, robot_hit_rule, wind_basis
@@ -82,14 +82,18 @@ def semantic_terms(maps, likelihood, class_prior):
                                                  column_axis=2 if m.probs.ndim == 4 else None) for m in maps])
 
 
-def make_estimator(name, model, config, *, prior=None):
-    """The olfactory estimator ``name`` of :data:`ESTIMATORS` on ``model`` with ``config``'s settings."""
+def make_estimator(name, model, config, *, prior=None, seed: int = 0):
+    """The olfactory estimator ``name`` of :data:`ESTIMATORS` on ``model`` with ``config``'s settings; ``seed``
+    seeds the estimators that draw random numbers (``particle-filter``), the run's seed where one is given."""
     if name == "infotaxis":
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
                                         false_hit_rate=config.false_hit_rate, missed_hit_rate=config.missed_hit_rate,
                                         parameter_grid=config.parameter_grid)
     if name == "pmfs":
         return PMFSEstimator.from_model(model, prior=prior, tempering=config.pmfs_tempering)
+    if name == "particle-filter":
+        return ParticleFilter.from_model(model, prior=prior, tempering=config.tempering,
+                                         false_hit_rate=config.false_hit_rate, seed=seed)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 
@@ -138,6 +142,8 @@ class VariantPosteriors:
     variants : sequence of str, optional, keyword-only
         The variants whose posteriors are wanted (default: all of :data:`VARIANTS`); only their class-belief maps
         are kept and updated (a closed-loop run needs its own variant's only).
+    seed : int, optional, keyword-only
+        The run's seed, for an estimator that draws random numbers (:func:`make_estimator`); 0 by default.
 
     Attributes
     ----------
@@ -160,7 +166,8 @@ class VariantPosteriors:
         Whether the class beliefs come from a mapper (then the camera is not used).
     """
 
-    def __init__(self, world, estimator: str, config: ExperimentConfig, *, setting=None, variants=VARIANTS):
+    def __init__(self, world, estimator: str, config: ExperimentConfig, *, setting=None, variants=VARIANTS,
+                 seed: int = 0):
         variants = tuple(variants)
         bad = [v for v in variants if v not in VARIANTS]
         if bad or not variants:
@@ -214,7 +221,7 @@ class VariantPosteriors:
         self.detector_model = robot_detector_model(classes, realistic=own_camera) \
             if config.detector_model == "estimated" else None
         self.estimator = make_estimator(estimator, self.model, config,
-                                        prior=setting.region_mask(house).astype(np.float64))
+                                        prior=setting.region_mask(house).astype(np.float64), seed=seed)
 
     def _plume(self, coefficients) -> PlumeModel:
         """The plume model with the mean wind Σ a_k φ_k of ``coefficients`` (one sparse LU factorisation)."""

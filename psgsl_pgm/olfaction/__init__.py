@@ -1,6 +1,6 @@
 """Olfactory estimators p(s | g) of the gas source location from hit/miss readings.
 
-Two estimators share one interface (:class:`OlfactoryEstimator`: ``update(position, hit, wind)``,
+The estimators share one interface (:class:`OlfactoryEstimator`: ``update(position, hit, wind)``,
 ``posterior``, ``reset()``) and one plume model (:class:`PlumeModel`: steady advection-diffusion on the
 occupancy grid (:class:`psgsl_pgm.GridMap`) with no-flux walls, absorbing outlets and the map's wind field, solved once with a sparse LU
 factorisation; Green's functions for all candidate sources from one adjoint solve per sensor cell):
@@ -8,9 +8,11 @@ factorisation; Green's functions for all candidate sources from one adjoint solv
 * :class:`GridInfotaxis` — Bayesian hit/miss posterior with Poisson encounters, P(hit | s) = 1 − exp(−κ G)
   (Vergassola et al. 2007), tempered against correlated readings;
 * :class:`PMFSEstimator` — the PMFS family (the paper's baseline, Sec. "Validation"): a hit-probability map
-  with confidence compared with the hit map each candidate source would produce.
+  with confidence compared with the hit map each candidate source would produce;
+* :class:`ParticleFilter` — sequential importance resampling over the source's position and release rate on the
+  same likelihood as :class:`GridInfotaxis`, p(s | g) the particles' weight per cell.
 
-Either posterior is the olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
+Every posterior is the olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
 and is combined with the semantic term by :func:`psgsl_pgm.fuse`.
 
 Hits are the robot's decision from its sensor's output (:class:`HitRule`: the rate of rise for a metal-oxide
@@ -45,6 +47,7 @@ from ._hitmap import HitProbabilityMap
 from ._hits import HIT_RULE_KINDS, HitRule
 from ._infotaxis import GridInfotaxis
 from ._operator import advection_diffusion_operator, bernoulli
+from ._particle import ParticleFilter
 from ._plume import PlumeModel
 from ._pmfs import PMFSEstimator
 from ._wind_estimate import MeanWindEstimator
@@ -59,6 +62,7 @@ __all__ = [
     "Observation",
     "OlfactoryEstimator",
     "PMFSEstimator",
+    "ParticleFilter",
     "PlumeFit",
     "PlumeModel",
     "advection_diffusion_operator",

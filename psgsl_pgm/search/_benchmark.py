@@ -39,6 +39,7 @@ from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sourc
 from ._grid import closed_loop_in_world
 from ._loop import SearchConfig
 from ._policies import POLICIES, SEMANTICS_ALONE
+from ._reactive import REACTIVE
 from ._split import benchmark_sample, check_split
 from ._store import read_run_key, write_search_run
 
@@ -55,7 +56,7 @@ def benchmark_arms(policies, variants, condition: str) -> list:
     out = []
     for p in policies:
         for v in (variants[:1] if p == "tour" else variants):
-            if p in SEMANTICS_ALONE and v == "olfaction":
+            if (p in SEMANTICS_ALONE and v == "olfaction") or (p in REACTIVE and v != "olfaction"):
                 continue
             if condition != "right-ontology" and (p == "tour" or v == "olfaction"):
                 continue
@@ -210,6 +211,9 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     if set(policies) <= set(SEMANTICS_ALONE) and variants == ("olfaction",):
         raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
                          "['olfaction'] only")
+    if set(policies) <= set(REACTIVE) and "olfaction" not in variants:
+        raise ValueError(f"policies {list(policies)}: reactive policies run with variant 'olfaction' only; variants "
+                         f"are {list(variants)}")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
     off_rate = unit_interval(off_rate, "off_rate")

@@ -20,6 +20,7 @@ from ._loop import SearchConfig, run_closed_loop
 from ._metrics import declaration_summary, wilson_interval
 from ._split import split_of_seeds
 from ._policies import POLICIES, SEMANTICS_ALONE, check_semantics_alone
+from ._reactive import REACTIVE
 from ._store import load_search_run, read_run_key, search_run_path, write_search_run
 from ._survival import holm, kaplan_meier, km_median, paired_comparison, rmst
 
@@ -312,11 +313,14 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     seeds = [int(s) for s in seeds]
     if not (sources and policies and variants and estimators and seeds):
         raise ValueError("need at least one source, policy, variant, estimator and seed")
-    if grid is None:  # semantics alone has no olfaction variant: that pair is left out
+    if grid is None:  # semantics alone has no olfaction variant, a reactive policy only it: those pairs are left out
         grid = [(so, p, v, e, se) for se, so, p, v, e in itertools.product(seeds, sources, policies, variants,
                                                                            estimators)
-                if not (p in SEMANTICS_ALONE and v == "olfaction")]
+                if not (p in SEMANTICS_ALONE and v == "olfaction") and not (p in REACTIVE and v != "olfaction")]
         if not grid:
+            if set(policies) <= set(REACTIVE):
+                raise ValueError(f"policies {list(policies)}: reactive policies run with variant 'olfaction' only; "
+                                 f"variants are {list(variants)}")
             raise ValueError(f"policies {list(policies)}: semantics alone needs a semantic variant; variants are "
                              "['olfaction'] only")
     else:

@@ -358,7 +358,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     if space is None:
         space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
                           n_headings=search.n_headings)
-    beliefs = VariantPosteriors(world, estimator, config, setting=setting, variants=(variant,))
+    beliefs = VariantPosteriors(world, estimator, config, setting=setting, variants=(variant,), seed=int(seed))
     hits = robot_hit_rule(world.gas_sensor)  # the robot's hit decision for its kind of sensor
     tour = exploration_tour(house, start=start_xy, clearance=search.clearance)
     plan = _tour_plan(tour) if policy == "tour" else None

@@ -99,6 +99,10 @@ moves (:meth:`FreeSpace.candidates`).
   semantics). The robot drives to that cell directly when it is within the horizon, else towards it as
   ``greedy``, re-planning at every stop; ties go to the first object in the map's order. With no object left
   (every footprint ruled out, or none in the map) it goes on as ``semantic-modes``. Needs a semantic variant.
+* ``entrotaxis`` — Hutchinson, Oh & Chen (2018): the entropy of the predicted measurement of the stop (found,
+  or the gas reading), on the candidates of ``infotaxis`` (:mod:`psgsl_pgm.search._entrotaxis`).
+* ``surge-cast``, ``spiral`` — reactive baselines: gas hits and anemometer readings only, no p(s | g), variant
+  ``olfaction`` only (:mod:`psgsl_pgm.search._reactive`).
 * ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
 """
 
@@ -112,12 +116,15 @@ from scipy.special import entr
 from .._shared._validate import one_of
 from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
+from ._entrotaxis import choose_entrotaxis
+from ._reactive import REACTIVE, check_reactive, reactive_step
 
 __all__ = ["Decision", "POLICIES", "SCORES", "SEMANTICS_ALONE", "Situation", "check_score", "check_semantics_alone",
            "choose", "object_scores", "olfactory_gain", "score_per_time", "semantic_mode", "travel_time"]
 
 #: Policies of the closed loop.
-POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object")
+POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object",
+            "entrotaxis", "surge-cast", "spiral")
 #: Policies that read the semantic term alone, no gas: they need a semantic variant.
 SEMANTICS_ALONE = ("semantic-modes", "nearest-object")
 #: Rules that turn a pose's gain G and time τ into its score (module docstring).
@@ -204,10 +211,12 @@ def score_per_time(gain, tau) -> np.ndarray:
 
 def check_semantics_alone(policy: str, variant: str, *, where: str = "") -> None:
     """ValueError when ``policy`` reads semantics alone (:data:`SEMANTICS_ALONE`) and ``variant`` is
-    ``olfaction``, which has no semantic term; ``where`` prefixes the message (e.g. ``"grid entries: "``)."""
+    ``olfaction``, which has no semantic term, and when a reactive policy (:data:`REACTIVE`) is given a semantic
+    variant; ``where`` prefixes the message (e.g. ``"grid entries: "``)."""
     if policy in SEMANTICS_ALONE and variant == "olfaction":
         raise ValueError(f"{where}policy {policy!r} (semantics alone, no gas) needs a semantic variant "
                          f"('semantics' or 'semantics+rooms'), got 'olfaction'")
+    check_reactive(policy, variant, where=where)
 
 
 def check_score(value) -> str:
@@ -934,4 +943,8 @@ def choose(policy: str, sit: Situation) -> Decision:
         return _choose_infotaxis(sit)
     if policy == "space-aware-infotaxis":
         return _choose_space_aware(sit)
+    if policy == "entrotaxis":
+        return choose_entrotaxis(sit)
+    if policy in REACTIVE:
+        return reactive_step(policy, sit)
     raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")
