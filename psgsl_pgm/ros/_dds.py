@@ -26,8 +26,7 @@ The messages decoded here have the attribute names of the ROS messages (``msg.he
 them unchanged. cyclonedds is imported only inside these functions (the ``ros`` extra).
 """
 
-from __future__ import annotations
-
+# no "from __future__ import annotations": cyclonedds reads the structs' field annotations as types
 import functools
 import time
 

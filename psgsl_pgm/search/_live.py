@@ -197,7 +197,8 @@ class _Stream:
         self.gas_t: list = []
         self.gas_arrived: list = []  # wall time of each gas reading's arrival
         self.det_t: list = []
-        self.pose_last = self.wind_last = None
+        self.wind_t: list = []
+        self.pose_last = None
         self.tf_topics = {t for t, m in subs.items() if m == TF}
 
     def add(self, topic: str, t_recv: int, msg, now: float) -> None:
@@ -207,7 +208,7 @@ class _Stream:
             self.gas_t.append(_stamp(msg) if hasattr(msg, "header") else t_recv)
             self.gas_arrived.append(now)
         if topic == r["wind"]:
-            self.wind_last = max(self.wind_last or _stamp(msg), _stamp(msg))
+            self.wind_t.append(_stamp(msg))
         if topic == r["detections"]:
             self.det_t.append(_stamp(msg))
         if topic == r["pose"] and topic != "/tf_static":
@@ -225,17 +226,27 @@ class _Stream:
             if not last and now - self.gas_arrived[k + 1] < latency and not final:
                 break
             until = None if last else self.gas_t[k + 1]
-            need = max([self.gas_t[k]] + [d for d in self.det_t if until is None or d < until])
-            if self.pose_last is None or self.wind_last is None or self.pose_last < need or self.wind_last < self.gas_t[k]:
+            after = self._wind_after(self.gas_t[k])
+            if after is None or self.pose_last is None:
+                break
+            # the pose is looked up at the reading, its frames and the wind samples kept (messages())
+            need = max([self.gas_t[k], after] + [d for d in self.det_t if until is None or d < until])
+            if self.pose_last < need:
                 break
             k += 1
         return k
 
+    def _wind_after(self, t: int):
+        """The first wind stamp at or after ``t`` (the interpolation's right neighbour), or None."""
+        return next((w for w in self.wind_t if w >= t), None)
+
     def messages(self, n: int) -> list:
-        """The messages behind the first ``n`` gas readings: every message but later gas readings and detection
-        arrays stamped at or after reading n (they belong to later steps)."""
+        """The messages behind the first ``n`` gas readings: every message but later gas readings, detection
+        arrays stamped at or after reading n (they belong to later steps) and wind samples after the first one
+        at or after reading n - 1."""
         r = self.roles
         until = self.gas_t[n] if n < len(self.gas_t) else None
+        wind_until = self._wind_after(self.gas_t[n - 1]) if n else None
         out, g = [], 0
         for topic, t, msg in self.raw:
             if topic == r["gas"]:
@@ -244,6 +255,8 @@ class _Stream:
                     continue
             if topic == r["detections"] and until is not None and _stamp(msg) >= until:
                 continue
+            if topic == r["wind"] and wind_until is not None and _stamp(msg) > wind_until:
+                continue  # a later sample than the last step's right neighbour: its pose may not have come yet
             out.append((topic, t, msg))
         return out
 

@@ -1,0 +1,234 @@
+"""psgsl live over a real DDS participant on the loopback interface.
+
+A publisher participant plays a bag written by the project's writer (the synthetic hallway episode of
+``tests/ros/bags.py``) message by message under ROS 2's DDS names and types; the node, in another participant of
+the same domain, must assimilate exactly the offline replay's steps: the same posteriors bit for bit, the same
+goals as a session fed from the bag, and on the wire a PoseStamped and an OccupancyGrid per step that a third
+participant receives. Each test has its own domain id; the Cyclone DDS configuration keeps the traffic on lo.
+"""
+
+from __future__ import annotations
+
+import builtins
+import os
+import threading
+import time
+import zlib
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rosbags", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
+pytest.importorskip("cyclonedds", reason="the ros extra is not installed (pip install 'psgsl-pgm[ros]')")
+
+from psgsl_pgm.cli._main import main
+from psgsl_pgm.experiment._replay import replay, replay_steps
+from psgsl_pgm.experiment import VARIANTS
+from psgsl_pgm.ros import read_bag
+from psgsl_pgm.ros._dds import (DdsEndpoint, dds_topic, dds_type_name, message_types, pose_stamped,
+                                posterior_grid)
+from psgsl_pgm.ros._types import typestore
+from psgsl_pgm.search._live import LiveSession, live_subscriptions, run_live, write_live
+
+from .bags import episode_bag
+
+LOOPBACK = """<CycloneDDS><Domain Id="any"><General><Interfaces><NetworkInterface name="lo"/></Interfaces>
+<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>
+<MaxAutoParticipantIndex>30</MaxAutoParticipantIndex><Peers><Peer address="127.0.0.1"/></Peers></Discovery>
+</Domain></CycloneDDS>"""
+
+POLICY = "greedy"  # the cheapest policy: the goals' equality is about the stream, not the policy's cost
+
+
+@pytest.fixture()
+def domain(tmp_path, monkeypatch, request):
+    """A domain id of this test alone (from its name and the process), with Cyclone DDS held to 127.0.0.1 / lo."""
+    cfg = tmp_path / "cyclonedds.xml"
+    cfg.write_text(LOOPBACK)
+    monkeypatch.setenv("CYCLONEDDS_URI", cfg.as_uri())
+    return 1 + (zlib.crc32(request.node.name.encode()) + os.getpid()) % 200
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory):
+    return episode_bag(tmp_path_factory.mktemp("live") / "episode.bag", n=6)
+
+
+def _bag_messages(path, topics):
+    """(topic, receive stamp, message type, CDR bytes) of the bag's ``topics`` in bag order."""
+    from rosbags.rosbag2 import Reader
+
+    with Reader(path) as reader:
+        conns = [c for c in reader.connections if c.topic in topics]
+        return [(c.topic, int(t), c.msgtype, bytes(raw)) for c, t, raw in reader.messages(connections=conns)]
+
+
+def _wait_matched(endpoint, topics, timeout=5.0):
+    end = time.monotonic() + timeout
+    while any(endpoint.matched(t) == 0 for t in topics):
+        if time.monotonic() > end:
+            raise AssertionError(f"no DDS match on {[t for t in topics if endpoint.matched(t) == 0]}")
+        time.sleep(0.01)
+
+
+def _offline_goals(bag, session):
+    data = read_bag(bag)
+    frames, _ = session.frames(data.detections)
+    steps = replay_steps(data, frames, threshold=session.threshold, tolerance=0.5)
+    yaw = dict(zip(data.pose_t.tolist(), data.pose[:, 2].tolist()))
+    return [session.observe(s, yaw[s[0]]) for s in steps]
+
+
+def test_ros2_naming_as_rmw_cyclonedds_spells_it():
+    assert dds_topic("/tf") == "rt/tf"
+    assert dds_topic("/robot1/goal_pose") == "rt/robot1/goal_pose"
+    assert dds_type_name("tf2_msgs/msg/TFMessage") == "tf2_msgs::msg::dds_::TFMessage_"
+    assert message_types()["olfaction_msgs/msg/GasSensor"].__idl_typename__ == "olfaction_msgs::msg::dds_::GasSensor_"
+    for bad in ("tf", "/tf/", ""):
+        with pytest.raises(ValueError, match="absolute name"):
+            dds_topic(bad)
+    with pytest.raises(ValueError, match="pkg/msg/Type"):
+        dds_type_name("geometry_msgs/PoseStamped")
+
+
+def test_every_struct_is_the_cdr_rosbags_writes(bag):
+    """Field order and widths: each recorded message decodes into the DDS struct and re-encodes to the same bytes;
+    the published types encode as rosbags encodes them."""
+    rows = _bag_messages(bag, {"/tf", "/gas", "/wind", "/anemometer", "/detections", "/map", "/psgsl/episode"})
+    T = message_types()
+    seen = set()
+    for topic, _, msgtype, raw in rows:
+        msg = T[msgtype].deserialize(raw)
+        assert bytes(msg.serialize()) == raw, topic
+        seen.add(msgtype)
+    assert len(seen) == 7
+    store = typestore()
+    goal = pose_stamped(1_700_000_000_123_456_789, "map", (1.5, -2.0, 0.7))
+    back = store.deserialize_cdr(bytes(goal.serialize()), "geometry_msgs/msg/PoseStamped")
+    assert (back.header.stamp.sec, back.header.stamp.nanosec) == (1_700_000_000, 123_456_789)
+    assert (back.pose.position.x, back.pose.position.y) == (1.5, -2.0)
+    assert np.isclose(2 * np.arctan2(back.pose.orientation.z, back.pose.orientation.w), 0.7)
+    from psgsl_pgm.sim import default_house
+
+    grid = default_house(0).grid
+    p = np.zeros(grid.shape)
+    p[3, 4], p[5, 6] = 0.75, 0.25
+    occ = store.deserialize_cdr(bytes(posterior_grid(0, "map", grid, p).serialize()), "nav_msgs/msg/OccupancyGrid")
+    data = np.asarray(occ.data).reshape(occ.info.height, occ.info.width)
+    assert data[3, 4] == 100 and data[5, 6] == 33 and data.sum() == 133
+    assert np.isclose(occ.info.resolution, grid.resolution) and occ.info.origin.position.x == grid.origin[0]
+
+
+def test_the_node_on_dds_equals_the_offline_replay(bag, domain, tmp_path):
+    """A publisher plays the bag at its own pace while the node runs; posteriors, goals and the messages on the
+    wire match the offline replay's."""
+    roles, subs = live_subscriptions()
+    node = DdsEndpoint(subs, {"/goal_pose": "geometry_msgs/msg/PoseStamped",
+                              "/psgsl/posterior": "nav_msgs/msg/OccupancyGrid"}, domain_id=domain)
+    rows = _bag_messages(bag, set(subs))
+    player = DdsEndpoint({}, {t: m for t, _, m, _ in rows}, domain_id=domain)
+    listener = DdsEndpoint({"/goal_pose": "geometry_msgs/msg/PoseStamped",
+                            "/psgsl/posterior": "nav_msgs/msg/OccupancyGrid"}, {}, domain_id=domain)
+    _wait_matched(player, {t for t, _, _, _ in rows})
+    _wait_matched(node, ["/goal_pose", "/psgsl/posterior"])
+    T = message_types()
+    finished = threading.Event()
+
+    def play():
+        for topic, t, msgtype, raw in rows:
+            player.publish(topic, T[msgtype].deserialize(raw), t_ns=t)
+            time.sleep(0.003)
+        finished.set()
+
+    session = LiveSession(policy=POLICY)
+    thread = threading.Thread(target=play)
+    thread.start()
+    quiet = []
+
+    def stop():  # a second after the last message: everything sent has arrived
+        if finished.is_set() and not quiet:
+            quiet.append(time.monotonic())
+        return bool(quiet) and time.monotonic() - quiet[0] > 1.0
+
+    result = run_live(node, session, roles=roles, subs=subs, stop=stop, poll=0.01)
+    thread.join()
+    offline = replay(bag, keep_posteriors=True)
+    steps = result["steps"]
+    assert len(steps) == offline.run.n_steps == 6 and result["pending"] == 0
+    for k, s in enumerate(steps):
+        assert np.array_equal(s.posteriors, offline.posteriors[k + 1]), k
+        assert np.array_equal(s.position, offline.run.position[k + 1])
+        assert s.hit == offline.run.hit[k + 1]
+    reference = _offline_goals(bag, LiveSession(policy=POLICY))
+    assert [tuple(s.goal) for s in steps] == [tuple(s.goal) for s in reference]
+    time.sleep(0.3)
+    got = listener.take()
+    goals = [m for t, _, m in got if t == "/goal_pose"]
+    grids = [m for t, _, m in got if t == "/psgsl/posterior"]
+    assert len(goals) == len(grids) == 6
+    v = VARIANTS.index(session.variant)
+    for s, g, o, p in zip(reference, goals, grids, offline.posteriors[1:]):
+        assert (g.pose.position.x, g.pose.position.y) == tuple(s.goal[:2]) and g.header.frame_id == "map"
+        assert g.header.stamp.sec * 10**9 + g.header.stamp.nanosec == s.t_ns
+        assert list(o.data) == list(posterior_grid(s.t_ns, "map", session.house.grid, p[v]).data)
+    # the recorded run replays offline to the same final posteriors
+    written = write_live(result, session, tmp_path / "out", subs=subs)
+    assert {p.name for p in written} >= {"live.bag", "steps.csv", "posterior-semantics+rooms.npy"}
+    again = replay(tmp_path / "out" / "live.bag", keep_posteriors=False)
+    assert np.array_equal(again.final, offline.final)
+    for e in (node, player, listener):
+        e.close()
+
+
+def test_a_reading_waits_for_its_pose_and_the_next_reading(bag, domain):
+    """Readings whose pose has not come yet stay pending (never extrapolated); the last waits for the end."""
+    roles, subs = live_subscriptions()
+    node = DdsEndpoint(subs, {"/goal_pose": "geometry_msgs/msg/PoseStamped",
+                              "/psgsl/posterior": "nav_msgs/msg/OccupancyGrid"}, domain_id=domain)
+    rows = [r for r in _bag_messages(bag, set(subs))]
+    t_gas = [t for topic, t, _, _ in rows if topic == "/gas"]
+    rows = [r for r in rows if not (r[0] == "/tf" and r[1] > t_gas[2])]  # the pose stops at the third reading
+    player = DdsEndpoint({}, {t: m for t, _, m, _ in rows}, domain_id=domain)
+    _wait_matched(player, {t for t, _, _, _ in rows})
+    T = message_types()
+    for topic, t, msgtype, raw in rows:
+        player.publish(topic, T[msgtype].deserialize(raw), t_ns=t)
+    result = run_live(node, LiveSession(policy=POLICY), roles=roles, subs=subs, duration=1.0, poll=0.01)
+    assert len(result["steps"]) == 3 and result["pending"] == 3
+    for e in (node, player):
+        e.close()
+
+
+def test_unknown_topic_types_and_roles_are_refused():
+    with pytest.raises(ValueError, match="gas: unknown topic type 'std_msgs/msg/Int32'"):
+        live_subscriptions(types={"gas": "std_msgs/msg/Int32"})
+    with pytest.raises(ValueError, match="unknown role"):
+        live_subscriptions(topics={"camera": "/cam"})
+    with pytest.raises(ValueError, match="unknown message type"):
+        DdsEndpoint({"/gas": "std_msgs/msg/Int32"}, {})
+    with pytest.raises(ValueError, match="domain_id"):
+        DdsEndpoint({}, {}, domain_id=300)
+
+
+def test_cli_without_cyclonedds_says_what_to_install(monkeypatch, capsys):
+    real = builtins.__import__
+
+    def no_dds(name, *args, **kwargs):
+        if name.split(".")[0] == "cyclonedds":
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_dds)
+    message_types.cache_clear()
+    try:
+        assert main(["live", "--duration", "1"]) == 2
+    finally:
+        message_types.cache_clear()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "install psgsl-pgm[ros]" in err[0]
+
+
+def test_cli_refuses_an_unknown_topic_type_in_one_line(capsys):
+    assert main(["live", "--types", "wind=geometry_msgs/msg/Twist", "--duration", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "wind: unknown topic type 'geometry_msgs/msg/Twist'" in err[0]
