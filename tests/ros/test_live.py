@@ -232,3 +232,49 @@ def test_cli_refuses_an_unknown_topic_type_in_one_line(capsys):
     assert main(["live", "--types", "wind=geometry_msgs/msg/Twist", "--duration", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "wind: unknown topic type 'geometry_msgs/msg/Twist'" in err[0]
+
+
+def test_until_declared_stops_at_the_first_small_enough_region(bag, domain):
+    roles, subs = live_subscriptions()
+    node = DdsEndpoint(subs, {"/goal_pose": "geometry_msgs/msg/PoseStamped",
+                              "/psgsl/posterior": "nav_msgs/msg/OccupancyGrid"}, domain_id=domain)
+    rows = _bag_messages(bag, set(subs))
+    player = DdsEndpoint({}, {t: m for t, _, m, _ in rows}, domain_id=domain)
+    _wait_matched(player, {t for t, _, _, _ in rows})
+    T = message_types()
+    for topic, t, msgtype, raw in rows:
+        player.publish(topic, T[msgtype].deserialize(raw), t_ns=t)
+    session = LiveSession(policy=POLICY)
+    result = run_live(node, session, roles=roles, subs=subs, until_declared=55.0, duration=5.0, poll=0.01)
+    areas = [s.region_area for s in result["steps"]]
+    assert result["declared"] and areas[-1] <= 55.0 and all(a > 55.0 for a in areas[:-1]) and len(areas) > 1
+    with pytest.raises(ValueError, match="needs an end"):
+        run_live(node, session, roles=roles, subs=subs)
+    for e in (node, player):
+        e.close()
+
+
+def test_cli_runs_the_node_and_records_it(bag, domain, tmp_path, capsys):
+    rows = _bag_messages(bag, {"/tf", "/gas", "/wind", "/detections"})
+    player = DdsEndpoint({}, {t: m for t, _, m, _ in rows}, domain_id=domain)
+    T = message_types()
+
+    def play():
+        _wait_matched(player, {t for t, _, _, _ in rows}, timeout=8.0)
+        for topic, t, msgtype, raw in rows:
+            player.publish(topic, T[msgtype].deserialize(raw), t_ns=t)
+
+    thread = threading.Thread(target=play)
+    thread.start()
+    out = tmp_path / "run"
+    code = main(["live", "--domain-id", str(domain), "--duration", "3", "--policy", POLICY, "--out", str(out)])
+    thread.join()
+    player.close()
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert "psgsl live: 6 steps" in text and text.count(" goal (") == 6
+    assert sorted(p.name for p in out.iterdir()) == ["live.bag", "posterior-olfaction.npy", "posterior-semantics+rooms.npy",
+                                                     "posterior-semantics.npy", "steps.csv"]
+    offline = replay(bag)
+    assert np.array_equal(np.load(out / "posterior-semantics+rooms.npy"), offline.final[VARIANTS.index("semantics+rooms")])
+    assert len((out / "steps.csv").read_text().splitlines()) == 7
