@@ -17,9 +17,13 @@ Checked against ``ros2/rmw_cyclonedds`` branches ``humble`` and ``jazzy`` (ident
 two branches (``std_msgs``, ``geometry_msgs``, ``nav_msgs``, ``tf2_msgs``, ``builtin_interfaces``), with
 ``vision_msgs`` 4.x (the Humble and Jazzy release) and the lab's ``olfaction_msgs`` (``GasSensor``,
 ``Anemometer``: :mod:`psgsl_pgm.ros._types`). The tests check every struct's bytes against the CDR that rosbags
-writes into bags for the same message. From Iron on, a ROS 2 endpoint also announces its type's hash (RIHS01)
-in the DDS USER_DATA QoS; the endpoints made here announce none, which ROS 2 treats as an unknown hash: topics
-still match by name and type, only ``ros2 topic info --verbose`` shows no hash.
+writes into bags for the same message.
+
+From Iron on, a ROS 2 endpoint also announces its type's hash in the DDS USER_DATA QoS, ``typehash=RIHS01_<sha256>;``
+(``encode_type_hash_for_user_data_qos`` in ``ros2/rmw_dds_common``, ``jazzy``): the SHA-256 of the type's
+description, its fields and those of the types it refers to, as ``rosidl_generator_type_description`` (``ros2/rosidl``,
+``jazzy``) writes it (:func:`type_hash`). Every endpoint made here announces it; Humble's rmw_cyclonedds reads no
+USER_DATA, and matching is by topic and type name in both.
 
 The messages decoded here have the attribute names of the ROS messages (``msg.header.stamp.sec``,
 ``msg.transforms[0].transform.rotation.w``), so the bag reader's conversions (:mod:`psgsl_pgm.ros._read`) read
@@ -32,8 +36,8 @@ import time
 
 import numpy as np
 
-__all__ = ["MISSING_DDS", "DdsEndpoint", "dds_topic", "dds_type_name", "message_types", "pose_stamped",
-           "posterior_grid", "require_dds"]
+__all__ = ["DEFINITIONS", "MISSING_DDS", "DdsEndpoint", "dds_topic", "dds_type_name", "message_types",
+           "pose_stamped", "posterior_grid", "require_dds", "type_description", "type_hash"]
 
 #: The message when the Cyclone DDS binding is missing.
 MISSING_DDS = 'psgsl live needs the Cyclone DDS Python binding (the "ros" extra): install psgsl-pgm[ros]'
@@ -73,167 +77,145 @@ def dds_type_name(msgtype: str) -> str:
     return f"{parts[0]}::msg::dds_::{parts[2]}_"
 
 
+#: ROS 2 message type -> its fields, as in its ``.msg`` file (comments left out), Humble and Jazzy alike; the
+#: lab's olfaction_msgs and vision_msgs 4.x come from :mod:`psgsl_pgm.ros._types`.
+DEFINITIONS = {
+    "builtin_interfaces/msg/Time": "int32 sec\nuint32 nanosec",
+    "std_msgs/msg/Header": "builtin_interfaces/Time stamp\nstring frame_id",
+    "std_msgs/msg/Float32": "float32 data",
+    "std_msgs/msg/Float64": "float64 data",
+    "std_msgs/msg/String": "string data",
+    "geometry_msgs/msg/Vector3": "float64 x\nfloat64 y\nfloat64 z",
+    "geometry_msgs/msg/Point": "float64 x\nfloat64 y\nfloat64 z",
+    "geometry_msgs/msg/Quaternion": "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1",
+    "geometry_msgs/msg/Pose": "Point position\nQuaternion orientation",
+    "geometry_msgs/msg/PoseStamped": "std_msgs/Header header\nPose pose",
+    "geometry_msgs/msg/PoseWithCovariance": "Pose pose\nfloat64[36] covariance",
+    "geometry_msgs/msg/PoseWithCovarianceStamped": "std_msgs/Header header\nPoseWithCovariance pose",
+    "geometry_msgs/msg/Vector3Stamped": "std_msgs/Header header\nVector3 vector",
+    "geometry_msgs/msg/Transform": "Vector3 translation\nQuaternion rotation",
+    "geometry_msgs/msg/TransformStamped": "std_msgs/Header header\nstring child_frame_id\nTransform transform",
+    "tf2_msgs/msg/TFMessage": "geometry_msgs/TransformStamped[] transforms",
+    "nav_msgs/msg/MapMetaData": "builtin_interfaces/Time map_load_time\nfloat32 resolution\nuint32 width\n"
+                                "uint32 height\ngeometry_msgs/Pose origin",
+    "nav_msgs/msg/OccupancyGrid": "std_msgs/Header header\nMapMetaData info\nint8[] data",
+}
+
+#: Field type ids of ``type_description_interfaces/msg/FieldType`` (REP-2011); a fixed array adds 48, a bounded
+#: sequence 96, an unbounded one 144.
+_TYPE_IDS = {"nested": 1, "int8": 2, "uint8": 3, "char": 3, "int16": 4, "uint16": 5, "int32": 6, "uint32": 7,
+             "int64": 8, "uint64": 9, "float32": 10, "float64": 11, "bool": 15, "byte": 16, "string": 17}
+
+
+def _all_definitions() -> dict:
+    from ._types import _ANEMOMETER_MSG, _GAS_SENSOR_MSG, _VISION_MSGS, ANEMOMETER, GAS_SENSOR
+
+    return DEFINITIONS | {GAS_SENSOR: _GAS_SENSOR_MSG, ANEMOMETER: _ANEMOMETER_MSG} | _VISION_MSGS
+
+
+def _fields(msgtype: str, text: str) -> list:
+    """``[(name, base, kind, size)]`` of a ``.msg`` text: base a primitive or a nested ``pkg/msg/Type``; kind
+    ``""`` (single), ``"array"`` (fixed ``size``), ``"bounded"`` (``size``) or ``"sequence"``. Constants (``=``)
+    are no fields; a default value after the name is left out."""
+    pkg = msgtype.split("/")[0]
+    out = []
+    for line in text.splitlines():
+        tokens = line.split("#")[0].split()
+        if len(tokens) < 2 or "=" in tokens[1] or (len(tokens) > 2 and tokens[2].startswith("=")):
+            continue  # empty, or a constant
+        typ, name = tokens[:2]
+        base, kind, size = typ, "", 0
+        if "[" in typ:
+            base, _, rest = typ.partition("[")
+            rest = rest.rstrip("]")
+            kind, size = ("sequence", 0) if rest == "" else (("bounded", int(rest[2:])) if rest.startswith("<=")
+                                                            else ("array", int(rest)))
+        if base not in _TYPE_IDS:
+            p, _, t = base.rpartition("/")
+            base = f"{p or pkg}/msg/{t}"
+        out.append((name, base, kind, size))
+    return out
+
+
+def type_description(msgtype: str) -> dict:
+    """The type description of ``msgtype`` that ROS 2 hashes (REP-2011, ``rosidl_generator_type_description``):
+    its fields and those of every type it refers to (sorted by name), default values left out."""
+    defs = _all_definitions()
+    if msgtype not in defs:
+        raise ValueError(f"unknown message type {msgtype!r}; known: {sorted(defs)}")
+
+    def individual(name):
+        fields = []
+        for field, base, kind, size in _fields(name, defs[name]):
+            nested = base not in _TYPE_IDS
+            tid = _TYPE_IDS["nested" if nested else base] + {"": 0, "array": 48, "bounded": 96, "sequence": 144}[kind]
+            fields.append({"name": field, "type": {"type_id": tid, "capacity": size, "string_capacity": 0,
+                                                   "nested_type_name": base if nested else ""}})
+        return {"type_name": name, "fields": fields}
+
+    refs, queue = set(), [msgtype]
+    while queue:
+        for f in individual(queue.pop())["fields"]:
+            n = f["type"]["nested_type_name"]
+            if n and n not in refs:
+                refs.add(n)
+                queue.append(n)
+    return {"type_description": individual(msgtype),
+            "referenced_type_descriptions": [individual(n) for n in sorted(refs)]}
+
+
+def type_hash(msgtype: str) -> str:
+    """The RIHS01 hash ROS 2 (Iron, Jazzy and later) gives ``msgtype``: SHA-256 of its type description as
+    compact JSON (``rosidl_generator_type_description.calculate_type_hash``).
+
+    >>> type_hash("geometry_msgs/msg/PoseStamped")
+    'RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8'
+    """
+    import hashlib
+    import json
+
+    text = json.dumps(type_description(msgtype), ensure_ascii=True, allow_nan=False, separators=(", ", ": "))
+    return "RIHS01_" + hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
 @functools.lru_cache(maxsize=1)
 def message_types() -> dict:
-    """ROS 2 message type (``"pkg/msg/Type"``) -> its Cyclone DDS IDL struct (fields in the ``.msg`` order)."""
+    """ROS 2 message type (``"pkg/msg/Type"``) -> its Cyclone DDS IDL struct (fields in the ``.msg`` order), for
+    every type of :data:`DEFINITIONS` and the lab's and vision types."""
     require_dds()
+    import types as pytypes
     from dataclasses import dataclass
 
     from cyclonedds.idl import IdlStruct
     from cyclonedds.idl import types as t
 
-    from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR
+    prim = {"int8": t.int8, "uint8": t.uint8, "char": t.uint8, "byte": t.uint8, "int16": t.int16,
+            "uint16": t.uint16, "int32": t.int32, "uint32": t.uint32, "int64": t.int64, "uint64": t.uint64,
+            "float32": t.float32, "float64": t.float64, "bool": bool, "string": str}
+    defs = _all_definitions()
+    out: dict = {}
 
-    def name(msgtype):
-        return dds_type_name(msgtype)
+    def build(msgtype):
+        if msgtype in out:
+            return out[msgtype]
+        annotations = {}
+        for name, base, kind, size in _fields(msgtype, defs[msgtype]):
+            typ = prim[base] if base in prim else build(base)
+            if kind == "array":
+                typ = t.array[typ, size]
+            elif kind == "bounded":
+                typ = t.sequence[typ, size]
+            elif kind == "sequence":
+                typ = t.sequence[typ]
+            annotations[name] = typ
+        short = msgtype.rsplit("/", 1)[1]
+        cls = pytypes.new_class(short, (IdlStruct,), {"typename": dds_type_name(msgtype)},
+                                lambda ns: ns.update(__annotations__=annotations, __module__=__name__))
+        out[msgtype] = dataclass(cls)
+        return out[msgtype]
 
-    @dataclass
-    class Time(IdlStruct, typename=name("builtin_interfaces/msg/Time")):
-        sec: t.int32
-        nanosec: t.uint32
-
-    @dataclass
-    class Header(IdlStruct, typename=name("std_msgs/msg/Header")):
-        stamp: Time
-        frame_id: str
-
-    @dataclass
-    class Float32(IdlStruct, typename=name("std_msgs/msg/Float32")):
-        data: t.float32
-
-    @dataclass
-    class Float64(IdlStruct, typename=name("std_msgs/msg/Float64")):
-        data: t.float64
-
-    @dataclass
-    class String(IdlStruct, typename=name("std_msgs/msg/String")):
-        data: str
-
-    @dataclass
-    class Vector3(IdlStruct, typename=name("geometry_msgs/msg/Vector3")):
-        x: t.float64
-        y: t.float64
-        z: t.float64
-
-    @dataclass
-    class Point(IdlStruct, typename=name("geometry_msgs/msg/Point")):
-        x: t.float64
-        y: t.float64
-        z: t.float64
-
-    @dataclass
-    class Quaternion(IdlStruct, typename=name("geometry_msgs/msg/Quaternion")):
-        x: t.float64
-        y: t.float64
-        z: t.float64
-        w: t.float64
-
-    @dataclass
-    class Pose(IdlStruct, typename=name("geometry_msgs/msg/Pose")):
-        position: Point
-        orientation: Quaternion
-
-    @dataclass
-    class PoseStamped(IdlStruct, typename=name("geometry_msgs/msg/PoseStamped")):
-        header: Header
-        pose: Pose
-
-    @dataclass
-    class PoseWithCovariance(IdlStruct, typename=name("geometry_msgs/msg/PoseWithCovariance")):
-        pose: Pose
-        covariance: t.array[t.float64, 36]
-
-    @dataclass
-    class PoseWithCovarianceStamped(IdlStruct, typename=name("geometry_msgs/msg/PoseWithCovarianceStamped")):
-        header: Header
-        pose: PoseWithCovariance
-
-    @dataclass
-    class Vector3Stamped(IdlStruct, typename=name("geometry_msgs/msg/Vector3Stamped")):
-        header: Header
-        vector: Vector3
-
-    @dataclass
-    class Transform(IdlStruct, typename=name("geometry_msgs/msg/Transform")):
-        translation: Vector3
-        rotation: Quaternion
-
-    @dataclass
-    class TransformStamped(IdlStruct, typename=name("geometry_msgs/msg/TransformStamped")):
-        header: Header
-        child_frame_id: str
-        transform: Transform
-
-    @dataclass
-    class TFMessage(IdlStruct, typename=name("tf2_msgs/msg/TFMessage")):
-        transforms: t.sequence[TransformStamped]
-
-    @dataclass
-    class GasSensor(IdlStruct, typename=name(GAS_SENSOR)):
-        header: Header
-        technology: t.uint8
-        manufacturer: t.uint8
-        mpn: t.uint8
-        raw: t.float64
-        raw_units: t.uint8
-        raw_air: t.float64
-        calib_a: t.float64
-        calib_b: t.float64
-
-    @dataclass
-    class Anemometer(IdlStruct, typename=name(ANEMOMETER)):
-        header: Header
-        sensor_label: str
-        wind_speed: t.float32
-        wind_direction: t.float32
-
-    @dataclass
-    class ObjectHypothesis(IdlStruct, typename=name("vision_msgs/msg/ObjectHypothesis")):
-        class_id: str
-        score: t.float64
-
-    @dataclass
-    class ObjectHypothesisWithPose(IdlStruct, typename=name("vision_msgs/msg/ObjectHypothesisWithPose")):
-        hypothesis: ObjectHypothesis
-        pose: PoseWithCovariance
-
-    @dataclass
-    class BoundingBox3D(IdlStruct, typename=name("vision_msgs/msg/BoundingBox3D")):
-        center: Pose
-        size: Vector3
-
-    @dataclass
-    class Detection3D(IdlStruct, typename=name("vision_msgs/msg/Detection3D")):
-        header: Header
-        results: t.sequence[ObjectHypothesisWithPose]
-        bbox: BoundingBox3D
-        id: str
-
-    @dataclass
-    class Detection3DArray(IdlStruct, typename=name(DETECTIONS)):
-        header: Header
-        detections: t.sequence[Detection3D]
-
-    @dataclass
-    class MapMetaData(IdlStruct, typename=name("nav_msgs/msg/MapMetaData")):
-        map_load_time: Time
-        resolution: t.float32
-        width: t.uint32
-        height: t.uint32
-        origin: Pose
-
-    @dataclass
-    class OccupancyGrid(IdlStruct, typename=name("nav_msgs/msg/OccupancyGrid")):
-        header: Header
-        info: MapMetaData
-        data: t.sequence[t.int8]
-
-    local = dict(locals())
-    out = {}
-    for cls in local.values():
-        if isinstance(cls, type) and issubclass(cls, IdlStruct) and cls is not IdlStruct:
-            pkg, _, _, typ = cls.__idl_typename__.split("::")
-            out[f"{pkg}/msg/{typ[:-1]}"] = cls
+    for msgtype in defs:
+        build(msgtype)
     return out
 
 
@@ -343,15 +325,20 @@ class DdsEndpoint:
                 self._topics[name] = Topic(self.participant, dds_topic(name), types[msgtype])
             return self._topics[name]
 
+        def announce(msgtype):  # what rmw_cyclonedds (Iron, Jazzy) puts in an endpoint's USER_DATA
+            return Policy.Userdata(data=f"typehash={type_hash(msgtype)};".encode())
+
         for name, msgtype in subscriptions.items():
             latched = name in self.LATCHED
-            policies = [history, rel if (reliable or latched) else Policy.Reliability.BestEffort]
+            policies = [history, rel if (reliable or latched) else Policy.Reliability.BestEffort, announce(msgtype)]
             if latched:
                 policies.append(Policy.Durability.TransientLocal)
             self._readers[name] = DataReader(self.participant, topic_of(name, msgtype), qos=Qos(*policies))
             self._types[name] = msgtype
         for name, msgtype in publications.items():
-            policies = [history, rel] + ([Policy.Durability.TransientLocal] if name in self.LATCHED else [])
+            policies = [history, rel, announce(msgtype)]
+            if name in self.LATCHED:
+                policies.append(Policy.Durability.TransientLocal)
             self._writers[name] = DataWriter(self.participant, topic_of(name, msgtype), qos=Qos(*policies))
 
     def take(self) -> list:

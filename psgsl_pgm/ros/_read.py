@@ -443,8 +443,8 @@ def decode_messages(name: str, chosen: dict, raw: list, *, tf_topics, map_frame:
     pose = tree.lookup(robot_frame, map_frame, pose_t)
     if not np.isfinite(gas_xy).all() or not np.isfinite(wind).all():
         raise ValueError(f"{name}: a gas or wind reading or its pose is not finite")
-    return BagData(Path(name) if path is None else path, chosen, int(start), pose_t, pose, gas_t, np.asarray(gas_v), gas_xy, wind_t, wind,
-                   detections, grid, meta)
+    return BagData(Path(name) if path is None else path, chosen, int(start), pose_t, pose, gas_t, np.asarray(gas_v),
+                   gas_xy, wind_t, wind, detections, grid, meta)
 
 
 def _per_frame(tree: _Tree, t_ns: np.ndarray, frames: list, map_frame: str) -> np.ndarray:

@@ -91,6 +91,50 @@ def test_ros2_naming_as_rmw_cyclonedds_spells_it():
         dds_type_name("geometry_msgs/PoseStamped")
 
 
+#: RIHS01 hashes of ROS 2 Jazzy's generated type descriptions, as other ROS 2 client projects pin them in their tests
+JAZZY_HASHES = {
+    "geometry_msgs/msg/PoseStamped": "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8",
+    "geometry_msgs/msg/PoseWithCovarianceStamped":
+        "RIHS01_26432f9803e43727d3c8f668d1fdb3c630f548af631e2f4e31382371bfea3b6e",
+    "std_msgs/msg/String": "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18",
+    "rosgraph_msgs/msg/Clock": "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564",
+}
+
+
+def test_type_hashes_are_ros2_jazzys(monkeypatch):
+    from psgsl_pgm.ros import _dds
+
+    monkeypatch.setitem(_dds.DEFINITIONS, "rosgraph_msgs/msg/Clock", "builtin_interfaces/Time clock")
+    for msgtype, expected in JAZZY_HASHES.items():
+        assert _dds.type_hash(msgtype) == expected, msgtype
+    # a field renamed, retyped or moved is another type
+    monkeypatch.setitem(_dds.DEFINITIONS, "rosgraph_msgs/msg/Clock", "builtin_interfaces/Time clocks")
+    assert _dds.type_hash("rosgraph_msgs/msg/Clock") != JAZZY_HASHES["rosgraph_msgs/msg/Clock"]
+    desc = _dds.type_description("geometry_msgs/msg/PoseWithCovariance")
+    cov = desc["type_description"]["fields"][1]
+    assert cov == {"name": "covariance", "type": {"type_id": 59, "capacity": 36, "string_capacity": 0,
+                                                  "nested_type_name": ""}}
+    assert [d["type_name"] for d in desc["referenced_type_descriptions"]] == [
+        "geometry_msgs/msg/Point", "geometry_msgs/msg/Pose", "geometry_msgs/msg/Quaternion"]
+    with pytest.raises(ValueError, match="unknown message type"):
+        _dds.type_hash("std_msgs/msg/Int32")
+
+
+def test_endpoints_announce_the_type_hash_as_rmw_cyclonedds_does(domain):
+    from cyclonedds.qos import Policy
+
+    node = DdsEndpoint({"/goal_pose": "geometry_msgs/msg/PoseStamped"}, {}, domain_id=domain)
+    player = DdsEndpoint({}, {"/goal_pose": "geometry_msgs/msg/PoseStamped"}, domain_id=domain)
+    _wait_matched(player, ["/goal_pose"])
+    reader = node._readers["/goal_pose"]
+    data = reader.get_matched_publication_data(reader.get_matched_publications()[0])
+    expected = f"typehash={JAZZY_HASHES['geometry_msgs/msg/PoseStamped']};".encode()
+    assert data.qos[Policy.Userdata].data == expected
+    assert data.topic_name == "rt/goal_pose" and data.type_name == "geometry_msgs::msg::dds_::PoseStamped_"
+    for e in (node, player):
+        e.close()
+
+
 def test_every_struct_is_the_cdr_rosbags_writes(bag):
     """Field order and widths: each recorded message decodes into the DDS struct and re-encodes to the same bytes;
     the published types encode as rosbags encodes them."""
@@ -273,8 +317,10 @@ def test_cli_runs_the_node_and_records_it(bag, domain, tmp_path, capsys):
     text = capsys.readouterr().out
     assert code == 0, text
     assert "psgsl live: 6 steps" in text and text.count(" goal (") == 6
-    assert sorted(p.name for p in out.iterdir()) == ["live.bag", "posterior-olfaction.npy", "posterior-semantics+rooms.npy",
-                                                     "posterior-semantics.npy", "steps.csv"]
+    assert sorted(p.name for p in out.iterdir()) == ["live.bag", "posterior-olfaction.npy",
+                                                     "posterior-semantics+rooms.npy", "posterior-semantics.npy",
+                                                     "steps.csv"]
     offline = replay(bag)
-    assert np.array_equal(np.load(out / "posterior-semantics+rooms.npy"), offline.final[VARIANTS.index("semantics+rooms")])
+    final = np.load(out / "posterior-semantics+rooms.npy")
+    assert np.array_equal(final, offline.final[VARIANTS.index("semantics+rooms")])
     assert len((out / "steps.csv").read_text().splitlines()) == 7
