@@ -6,7 +6,7 @@ DDS names and types (:mod:`psgsl_pgm.ros._dds`), assimilates each gas reading as
 (``geometry_msgs/msg/PoseStamped``, what Nav2 drives to) and the posterior on ``/psgsl/posterior``
 (``nav_msgs/msg/OccupancyGrid``). It runs for ``--duration`` seconds, until the credible region is at most
 ``--until-declared`` m², or until Ctrl-C. ``--out`` records the run (a ROS 2 bag ``psgsl replay`` replays, the
-steps, the final posteriors). Without the ``ros`` extra it says in one line what to install (exit 2).
+steps, the final posteriors); ``--foxglove`` streams it to Foxglove (:mod:`psgsl_pgm.ros._stream`). Without the ``ros`` extra it says in one line what to install (exit 2).
 """
 
 from __future__ import annotations
@@ -57,6 +57,10 @@ def add_parser(subparsers):
     p.add_argument("--until-declared", type=float, default=None, metavar="M2",
                    help="stop once the credible region is at most M2 square metres")
     p.add_argument("--out", default=None, help="record the run here (live.bag, steps.csv, posterior-*.npy)")
+    p.add_argument("--foxglove", type=int, nargs="?", const=8765, default=None, metavar="PORT",
+                   help="stream the run to Foxglove over a WebSocket server on PORT (default 8765; 0: a free port)")
+    p.add_argument("--foxglove-host", default="127.0.0.1",
+                   help="address the Foxglove server binds (default: %(default)s, this machine only)")
     p.set_defaults(func=run)
     return p
 
@@ -93,6 +97,18 @@ def _run(args) -> int:
     clash = sorted(set(pubs) & set(subs))
     if clash:
         raise UsageError(f"topics {clash} are both subscribed to and published")
+    stream = None
+    if args.foxglove is not None:
+        from ..experiment import VARIANTS
+        from ..ros._stream import FoxgloveStream
+
+        try:
+            stream = FoxgloveStream(session.house.grid, VARIANTS, host=args.foxglove_host, port=args.foxglove)
+        except ImportError as exc:
+            raise UsageError(str(exc)) from None
+        except RuntimeError as exc:  # foxglove-sdk: the address is taken or cannot be bound
+            raise UsageError(f"--foxglove: {exc}") from None
+        print(f"psgsl live: Foxglove on ws://{args.foxglove_host}:{stream.port}", flush=True)
     endpoint = DdsEndpoint(subs, pubs, domain_id=domain, reliable=not args.best_effort)
     print(f"psgsl live: domain {domain}, listening to {', '.join(f'{r}={t}' for r, t in roles.items())}; goals on "
           f"{args.goal_topic}, posterior on {args.posterior_topic}" + ("" if args.duration or args.until_declared
@@ -102,6 +118,8 @@ def _run(args) -> int:
         print(f"  {step.t_ns * 1e-9:.3f}: at ({step.position[0]:.2f}, {step.position[1]:.2f}) "
               f"{'hit' if step.hit else 'miss'} {step.value:g}; goal ({step.goal[0]:.2f}, {step.goal[1]:.2f}, "
               f"{step.goal[2]:.2f} rad); 90 % region {step.region_area:.1f} m²", flush=True)
+        if stream is not None:
+            stream.step(step.t_ns, step.position, step.heading, step.posteriors, step.goal)
 
     interrupted = []  # Ctrl-C ends the run like --duration: the last reading is assimilated, --out is written
     previous = signal.getsignal(signal.SIGINT) if _main_thread() else None
@@ -116,6 +134,8 @@ def _run(args) -> int:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
         endpoint.close()
+        if stream is not None:
+            stream.close()
     n = len(result["steps"])
     print(f"psgsl live: {n} steps" + (", declared" if result["declared"] else "")
           + (f", {result['pending']} readings without pose or wind after them" if result["pending"] else "")

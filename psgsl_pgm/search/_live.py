@@ -55,9 +55,9 @@ DEFAULT_TOPICS = {
 
 
 class LiveStep(SimpleNamespace):
-    """One step of a live session: ``t_ns``, ``position`` (2,), ``hit``, ``value`` (ppm), ``posteriors``
-    (V, H, W) float64 of every variant, ``goal`` (3,) = (x, y, yaw) the policy chose next, ``region_area`` (m², the
-    session variant's credible region)."""
+    """One step of a live session: ``t_ns``, ``position`` (2,), ``heading`` (rad, the robot's at the reading),
+    ``hit``, ``value`` (ppm), ``posteriors`` (V, H, W) float64 of every variant, ``goal`` (3,) = (x, y, yaw) the
+    policy chose next, ``region_area`` (m², the session variant's credible region)."""
 
 
 class LiveSession:
@@ -147,7 +147,7 @@ class LiveSession:
         xy = self.space.position(np.array([dec.cell]))[0]
         goal = np.array([xy[0], xy[1], float(dec.headings[0])])
         area = float(credible_region(mine, s.credible).sum()) * self.house.grid.resolution**2
-        out = LiveStep(t_ns=int(t), position=stop, hit=bool(hit), value=float(value), posteriors=post, goal=goal,
+        out = LiveStep(t_ns=int(t), position=stop, heading=float(heading), hit=bool(hit), value=float(value), posteriors=post, goal=goal,
                        region_area=area)
         self.steps.append(out)
         return out

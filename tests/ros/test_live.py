@@ -311,12 +311,14 @@ def test_cli_runs_the_node_and_records_it(bag, domain, tmp_path, capsys):
     thread = threading.Thread(target=play)
     thread.start()
     out = tmp_path / "run"
-    code = main(["live", "--domain-id", str(domain), "--duration", "3", "--policy", POLICY, "--out", str(out)])
+    code = main(["live", "--domain-id", str(domain), "--duration", "3", "--policy", POLICY, "--out", str(out),
+                 "--foxglove", "0"])
     thread.join()
     player.close()
     text = capsys.readouterr().out
     assert code == 0, text
     assert "psgsl live: 6 steps" in text and text.count(" goal (") == 6
+    assert "psgsl live: Foxglove on ws://127.0.0.1:" in text
     assert sorted(p.name for p in out.iterdir()) == ["live.bag", "posterior-olfaction.npy",
                                                      "posterior-semantics+rooms.npy", "posterior-semantics.npy",
                                                      "steps.csv"]
