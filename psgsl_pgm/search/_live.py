@@ -24,6 +24,7 @@ detector model the one the replay uses to read detections.
 
 from __future__ import annotations
 
+import bisect
 import json
 import time
 from pathlib import Path
@@ -188,76 +189,112 @@ def _stamp(msg) -> int:
     return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
+class _Topic:
+    """One topic's messages in arrival order, with the running maximum of their stamps (searchable: the first
+    message at or after a time is found by bisection even when a stamp goes back)."""
+
+    def __init__(self):
+        self.items: list = []  # (receive stamp, message)
+        self.top: list = []  # running maximum of the stamps
+
+    def add(self, t_recv: int, msg, stamp: int) -> None:
+        self.items.append((t_recv, msg))
+        self.top.append(stamp if not self.top else max(self.top[-1], stamp))
+
+    def first_at(self, t: int) -> int:
+        """Index of the first message whose stamp (running maximum) is at or after ``t``."""
+        return bisect.bisect_left(self.top, t)
+
+    def first_after(self, t: int) -> int:
+        return bisect.bisect_right(self.top, t)
+
+
 class _Stream:
     """What the node has received, and which gas readings are ready to become steps (module docstring)."""
 
-    def __init__(self, roles: dict, subs: dict):
+    def __init__(self, roles: dict, subs: dict, tolerance: float):
         self.roles, self.subs = roles, subs
-        self.raw: list = []  # (topic, source stamp, message), in arrival order
-        self.gas_t: list = []
+        self.topics = {t: _Topic() for t in subs}
+        self.order: list = []  # (topic, index) in arrival order, for the record
         self.gas_arrived: list = []  # wall time of each gas reading's arrival
-        self.det_t: list = []
-        self.wind_t: list = []
-        self.pose_last = None
         self.tf_topics = {t for t, m in subs.items() if m == TF}
+        self.tol = round(float(tolerance) * 1e9)
 
     def add(self, topic: str, t_recv: int, msg, now: float) -> None:
-        self.raw.append((topic, t_recv, msg))
         r = self.roles
         if topic == r["gas"]:
-            self.gas_t.append(_stamp(msg) if hasattr(msg, "header") else t_recv)
+            stamp = _stamp(msg) if hasattr(msg, "header") else t_recv
             self.gas_arrived.append(now)
-        if topic == r["wind"]:
-            self.wind_t.append(_stamp(msg))
-        if topic == r["detections"]:
-            self.det_t.append(_stamp(msg))
-        if topic == r["pose"] and topic != "/tf_static":
-            stamps = [_stamp(tr) for tr in msg.transforms] if hasattr(msg, "transforms") else [_stamp(msg)]
-            if stamps:
-                self.pose_last = max([self.pose_last] + stamps if self.pose_last is not None else stamps)
+        elif hasattr(msg, "transforms"):
+            stamp = max((_stamp(tr) for tr in msg.transforms), default=0)
+        else:
+            stamp = _stamp(msg)
+        self.order.append((topic, len(self.topics[topic].items)))
+        self.topics[topic].add(t_recv, msg, stamp)
+
+    @property
+    def raw(self) -> list:
+        """Every message received, ``[(topic, receive stamp, message)]`` in arrival order."""
+        return [(topic, *self.topics[topic].items[i]) for topic, i in self.order]
+
+    @property
+    def n_gas(self) -> int:
+        return len(self.topics[self.roles["gas"]].items)
+
+    def _stamp_of(self, topic, k):
+        t_recv, msg = self.topics[topic].items[k]
+        return _stamp(msg) if hasattr(msg, "header") else t_recv
 
     def ready(self, done: int, now: float, latency: float, final: bool) -> int:
         """How many gas readings may be steps now (≥ ``done``)."""
+        r = self.roles
+        pose = self.topics[r["pose"]]
+        wind, dets = self.topics[r["wind"]], self.topics[r["detections"]]
         k = done
-        while k < len(self.gas_t):
-            last = k + 1 >= len(self.gas_t)
-            if last and not final:
+        while k < self.n_gas:
+            last = k + 1 >= self.n_gas
+            if not final and (last or now - self.gas_arrived[k + 1] < latency):
                 break
-            if not last and now - self.gas_arrived[k + 1] < latency and not final:
-                break
-            until = None if last else self.gas_t[k + 1]
-            after = self._wind_after(self.gas_t[k])
-            if after is None or self.pose_last is None:
+            t = self._stamp_of(r["gas"], k)
+            right = wind.first_at(t)  # the wind's right neighbour of the reading
+            if right >= len(wind.items) or not pose.top:
                 break
             # the pose is looked up at the reading, its frames and the wind samples kept (messages())
-            need = max([self.gas_t[k], after] + [d for d in self.det_t if until is None or d < until])
-            if self.pose_last < need:
+            n_frames = len(dets.items) if last else dets.first_at(self._stamp_of(r["gas"], k + 1))
+            need = max(t, wind.top[right], dets.top[n_frames - 1] if n_frames else t)
+            if pose.top[-1] < need:
                 break
             k += 1
         return k
 
-    def _wind_after(self, t: int):
-        """The first wind stamp at or after ``t`` (the interpolation's right neighbour), or None."""
-        return next((w for w in self.wind_t if w >= t), None)
-
-    def messages(self, n: int) -> list:
-        """The messages behind the first ``n`` gas readings: every message but later gas readings, detection
-        arrays stamped at or after reading n (they belong to later steps) and wind samples after the first one
-        at or after reading n - 1."""
+    def messages(self, done: int, n: int) -> list:
+        """The messages that steps ``done`` … ``n - 1`` need: gas readings ``done`` … ``n - 1``; the detection
+        arrays from reading ``done`` up to reading ``n`` (from the first, for the first step); wind samples from
+        the tolerance before reading ``done`` to the first at or after reading ``n - 1``; poses and transforms from
+        twice the tolerance before reading ``done`` (the lookups at those wind samples have their left neighbour);
+        every static transform."""
         r = self.roles
-        until = self.gas_t[n] if n < len(self.gas_t) else None
-        wind_until = self._wind_after(self.gas_t[n - 1]) if n else None
-        out, g = [], 0
-        for topic, t, msg in self.raw:
+        gas = self.topics[r["gas"]]
+        t_first = self._stamp_of(r["gas"], done)
+        t_last = self._stamp_of(r["gas"], n - 1)
+        after = self._stamp_of(r["gas"], n) if n < self.n_gas else None
+        window = None if done == 0 else t_first - self.tol
+        out = [(r["gas"], *gas.items[i]) for i in range(done, n)]
+        for topic, top in self.topics.items():
             if topic == r["gas"]:
-                g += 1
-                if g > n:
-                    continue
-            if topic == r["detections"] and until is not None and _stamp(msg) >= until:
                 continue
-            if topic == r["wind"] and wind_until is not None and _stamp(msg) > wind_until:
-                continue  # a later sample than the last step's right neighbour: its pose may not have come yet
-            out.append((topic, t, msg))
+            lo, hi = 0, len(top.items)
+            if topic == "/tf_static":
+                pass
+            elif topic == r["detections"]:
+                lo = 0 if done == 0 else top.first_at(t_first)
+                hi = hi if after is None else top.first_at(after)
+            elif topic == r["wind"]:
+                lo = 0 if window is None else top.first_at(window)
+                hi = min(top.first_at(t_last) + 1, hi)
+            elif window is not None:  # the pose and the transforms
+                lo = top.first_at(window - self.tol)
+            out.extend((topic, *top.items[i]) for i in range(lo, hi))
         return out
 
 
@@ -305,24 +342,24 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
     for name, v in (("duration", duration), ("until_declared", until_declared)):
         if v is not None and not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
             raise ValueError(f"{name} must be a positive number, got {v!r}")
-    stream = _Stream(roles, subs)
-    frames, skipped, n_dets = [], 0, 0
+    stream = _Stream(roles, subs, tolerance)
+    skipped = 0
     done, declared = 0, False
     t_end = None if duration is None else time.monotonic() + float(duration)
     name = "live (DDS)"
 
     def advance(final: bool) -> bool:
-        nonlocal frames, skipped, n_dets, done
+        nonlocal skipped, done
         k = stream.ready(done, time.monotonic(), latency, final)
         if k == done:
             return False
-        data = decode_messages(name, roles | {"map": None}, stream.messages(k), tf_topics=stream.tf_topics,
+        data = decode_messages(name, roles | {"map": None}, stream.messages(done, k), tf_topics=stream.tf_topics,
                                map_frame=map_frame, robot_frame=robot_frame, tolerance=tolerance)
-        new, s = session.frames(data.detections[n_dets:])
-        frames, skipped, n_dets = frames + new, skipped + s, len(data.detections)
+        frames, s = session.frames(data.detections)  # the arrays of steps done … k - 1 only
+        skipped += s
         steps = replay_steps(data, frames, threshold=session.threshold, tolerance=tolerance)
         yaw = dict(zip(data.pose_t.tolist(), data.pose[:, 2].tolist()))
-        for step in steps[done:k]:
+        for step in steps:
             out = session.observe(step, yaw[step[0]])
             endpoint.publish(goal_topic, pose_stamped(out.t_ns, map_frame, out.goal))
             endpoint.publish(posterior_topic, posterior_grid(out.t_ns, map_frame, session.house.grid,
@@ -348,7 +385,7 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
             break
         time.sleep(poll)
     return {"steps": session.steps, "declared": declared, "messages": stream.raw, "skipped_detections": skipped,
-            "pending": len(stream.gas_t) - done}
+            "pending": stream.n_gas - done}
 
 
 def write_live(result: dict, session: LiveSession, out, *, subs: dict, goal_topic: str = "/goal_pose",

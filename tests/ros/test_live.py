@@ -326,3 +326,49 @@ def test_cli_runs_the_node_and_records_it(bag, domain, tmp_path, capsys):
     final = np.load(out / "posterior-semantics+rooms.npy")
     assert np.array_equal(final, offline.final[VARIANTS.index("semantics+rooms")])
     assert len((out / "steps.csv").read_text().splitlines()) == 7
+
+
+class _Playback:
+    """An endpoint that hands the node one message per poll, in bag order, and keeps what the node publishes."""
+
+    def __init__(self, rows):
+        self.rows, self.i, self.published, self.T = rows, 0, [], message_types()
+
+    def take(self):
+        if self.i >= len(self.rows):
+            return []
+        topic, t, msgtype, raw = self.rows[self.i]
+        self.i += 1
+        return [(topic, t, self.T[msgtype].deserialize(raw))]
+
+    def publish(self, topic, message):
+        self.published.append((topic, message))
+
+
+def test_message_by_message_a_robots_bag_gives_the_replays_posteriors(tmp_path):
+    """The foreign bag's first 6 s (jittered stamps, map -> odom -> base_link, 10 Hz gas, a 4 Hz anemometer turned by 90°,
+    detections in a camera frame, another robot's frames) fed one message at a time: every reading becomes a step
+    as soon as the next one and its pose and wind have come, from a window of the messages, and the posteriors
+    are the offline replay's bit for bit."""
+    from .bags import rewrite
+    from .test_ros_foreign_bag import T0, make_bag
+
+    make_bag(tmp_path / "robot_bag", "mcap")
+    path = rewrite(tmp_path / "robot_bag", tmp_path / "first_6s",  # the last reading between two wind samples
+                   keep=lambda topic, t, msg: t <= T0 + (5.6 if topic == "/PID/Sensor_reading" else 6.0) * 1e9)
+    roles, subs = live_subscriptions(topics={"gas": "/PID/Sensor_reading", "wind": "/Anemometer/WindSensor_reading"},
+                                     types={"wind": "olfaction_msgs/msg/Anemometer"})
+    rows = _bag_messages(path, set(subs))
+    feed = _Playback(rows)
+    session = LiveSession(policy=POLICY)
+    taken_at = []
+    result = run_live(feed, session, roles=roles, subs=subs, latency=0.0, poll=0.0,
+                      stop=lambda: feed.i >= len(rows), on_step=lambda s: taken_at.append(feed.i))
+    offline = replay(path, tolerance=0.5, keep_posteriors=True)
+    n = offline.run.n_steps
+    assert len(result["steps"]) == n and n >= 55
+    for k, s in enumerate(result["steps"]):
+        assert np.array_equal(s.posteriors, offline.posteriors[k + 1]), k
+    assert result["skipped_detections"] == offline.n_frames == 6  # "person" is no class of the detector
+    assert sum(i < len(rows) for i in taken_at) >= n - 5  # live: all but the last few before the bag ended
+    assert [t for t, _ in feed.published[::2]] == ["/goal_pose"] * n
