@@ -140,7 +140,9 @@ def _run(args) -> int:
     print(f"psgsl live: {n} steps" + (", declared" if result["declared"] else "")
           + (f", {result['pending']} readings without pose or wind after them" if result["pending"] else "")
           + (f", {result['skipped_detections']} detections of unknown classes skipped"
-             if result["skipped_detections"] else ""))
+             if result["skipped_detections"] else "")
+          + (f", {result['late_detections']} detection arrays came after their step and were dropped"
+             if result["late_detections"] else ""))
     if args.out is not None:
         written = write_live(result, session, args.out, subs=subs, goal_topic=args.goal_topic,
                              posterior_topic=args.posterior_topic)

@@ -10,7 +10,9 @@ The live node is the offline replay (:mod:`psgsl_pgm.experiment._replay`) run as
   streams hold a sample stamped at or after it and after its frames (the interpolation has both neighbours),
   and ``latency`` seconds of wall time have passed since reading k + 1 arrived (for detections still on their
   way). At the end (duration, declaration, interrupt) the last reading becomes a step if its pose and wind are
-  covered;
+  covered. A detection array that arrives after its step was taken is dropped and counted. Only the messages
+  the new steps need are decoded (from twice the tolerance before them), so a step costs the same at any point
+  of a long run;
 * :class:`LiveSession` assimilates each step exactly as the replay does (:class:`VariantPosteriors`, no "not
   found here" update: the robot is driven by its own navigation, and a replay of the same messages gives the
   same posteriors), then asks the policy (:func:`psgsl_pgm.search.choose`, on the robot's map,
@@ -219,6 +221,8 @@ class _Stream:
         self.gas_arrived: list = []  # wall time of each gas reading's arrival
         self.tf_topics = {t for t, m in subs.items() if m == TF}
         self.tol = round(float(tolerance) * 1e9)
+        self.closed = None  # detection arrays stamped before this belong to steps already taken
+        self.late = 0
 
     def add(self, topic: str, t_recv: int, msg, now: float) -> None:
         r = self.roles
@@ -229,6 +233,9 @@ class _Stream:
             stamp = max((_stamp(tr) for tr in msg.transforms), default=0)
         else:
             stamp = _stamp(msg)
+            if topic == r["detections"] and self.closed is not None and stamp < self.closed:
+                self.late += 1  # its step is taken: dropped, counted
+                return
         self.order.append((topic, len(self.topics[topic].items)))
         self.topics[topic].add(t_recv, msg, stamp)
 
@@ -240,6 +247,10 @@ class _Stream:
     @property
     def n_gas(self) -> int:
         return len(self.topics[self.roles["gas"]].items)
+
+    def stamp_of_gas(self, k: int):
+        """The stamp of gas reading ``k``, or None when it has not come."""
+        return self._stamp_of(self.roles["gas"], k) if k < self.n_gas else None
 
     def _stamp_of(self, topic, k):
         t_recv, msg = self.topics[topic].items[k]
@@ -332,8 +343,10 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
     Returns
     -------
     dict
-        ``steps`` (list of LiveStep), ``declared`` (bool), ``messages`` (every (topic, stamp, message) received),
-        ``skipped_detections``, ``pending`` (gas readings received but not assimilated: no pose or wind after them).
+        ``steps`` (list of LiveStep), ``declared`` (bool), ``messages`` (every (topic, stamp, message) kept),
+        ``skipped_detections`` (of classes the detector does not know), ``late_detections`` (arrays that came
+        after their step was taken: dropped), ``pending`` (gas readings received but not assimilated: no pose or
+        wind after them).
     """
     from ..ros._dds import pose_stamped, posterior_grid
 
@@ -367,6 +380,7 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
             if on_step is not None:
                 on_step(out)
             done += 1
+            stream.closed = stream.stamp_of_gas(done)
             if until_declared is not None and out.region_area <= until_declared:
                 return True
         return False
@@ -385,7 +399,7 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
             break
         time.sleep(poll)
     return {"steps": session.steps, "declared": declared, "messages": stream.raw, "skipped_detections": skipped,
-            "pending": stream.n_gas - done}
+            "late_detections": stream.late, "pending": stream.n_gas - done}
 
 
 def write_live(result: dict, session: LiveSession, out, *, subs: dict, goal_topic: str = "/goal_pose",

@@ -372,3 +372,22 @@ def test_message_by_message_a_robots_bag_gives_the_replays_posteriors(tmp_path):
     assert result["skipped_detections"] == offline.n_frames == 6  # "person" is no class of the detector
     assert sum(i < len(rows) for i in taken_at) >= n - 5  # live: all but the last few before the bag ended
     assert [t for t, _ in feed.published[::2]] == ["/goal_pose"] * n
+
+
+def test_a_detection_array_after_its_step_is_dropped_and_counted(bag, tmp_path):
+    from .bags import rewrite
+
+    rows = _bag_messages(bag, {"/tf", "/gas", "/wind", "/detections"})
+    dets = [r for r in rows if r[0] == "/detections"]
+    assert len(dets) == 2
+    late = dets[1]  # the array at t = 3 s comes last, after the steps at 3 and 4 s were taken
+    feed = _Playback([r for r in rows if r is not late] + [late])
+    roles, subs = live_subscriptions()
+    result = run_live(feed, LiveSession(policy=POLICY), roles=roles, subs=subs, latency=0.0, poll=0.0,
+                      stop=lambda: feed.i >= len(feed.rows))
+    assert result["late_detections"] == 1 and len(result["steps"]) == 6
+    without = rewrite(bag, tmp_path / "without", keep=lambda topic, t, msg: not (topic == "/detections"
+                                                                                and t == late[1]))
+    offline = replay(without, keep_posteriors=True)
+    for k, s in enumerate(result["steps"]):
+        assert np.array_equal(s.posteriors, offline.posteriors[k + 1]), k
