@@ -147,6 +147,23 @@ def test_every_struct_is_the_cdr_rosbags_writes(bag):
         seen.add(msgtype)
     assert len(seen) == 7
     store = typestore()
+    S = store.types
+    head = S["std_msgs/msg/Header"](stamp=S["builtin_interfaces/msg/Time"](sec=5, nanosec=7), frame_id="odom")
+    pose = S["geometry_msgs/msg/Pose"](position=S["geometry_msgs/msg/Point"](x=1.0, y=2.0, z=3.0),
+                                       orientation=S["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.6, w=0.8))
+    others = {"std_msgs/msg/Float32": S["std_msgs/msg/Float32"](data=np.float32(0.1)),
+              "std_msgs/msg/Float64": S["std_msgs/msg/Float64"](data=0.1),
+              "geometry_msgs/msg/PoseStamped": S["geometry_msgs/msg/PoseStamped"](header=head, pose=pose),
+              "geometry_msgs/msg/PoseWithCovarianceStamped": S["geometry_msgs/msg/PoseWithCovarianceStamped"](
+                  header=head, pose=S["geometry_msgs/msg/PoseWithCovariance"](pose=pose,
+                                                                              covariance=np.arange(36.0)))}
+    for msgtype, msg in others.items():
+        raw = bytes(store.serialize_cdr(msg, msgtype))
+        assert bytes(T[msgtype].deserialize(raw).serialize()) == raw, msgtype
+    back = T["geometry_msgs/msg/PoseWithCovarianceStamped"].deserialize(
+        bytes(store.serialize_cdr(others["geometry_msgs/msg/PoseWithCovarianceStamped"],
+                                  "geometry_msgs/msg/PoseWithCovarianceStamped")))
+    assert list(back.pose.covariance) == list(range(36)) and back.header.frame_id == "odom"
     goal = pose_stamped(1_700_000_000_123_456_789, "map", (1.5, -2.0, 0.7))
     back = store.deserialize_cdr(bytes(goal.serialize()), "geometry_msgs/msg/PoseStamped")
     assert (back.header.stamp.sec, back.header.stamp.nanosec) == (1_700_000_000, 123_456_789)
