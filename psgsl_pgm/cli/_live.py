@@ -6,7 +6,8 @@ DDS names and types (:mod:`psgsl_pgm.ros._dds`), assimilates each gas reading as
 (``geometry_msgs/msg/PoseStamped``, what Nav2 drives to) and the posterior on ``/psgsl/posterior``
 (``nav_msgs/msg/OccupancyGrid``). It runs for ``--duration`` seconds, until the credible region is at most
 ``--until-declared`` m², or until Ctrl-C. ``--out`` records the run (a ROS 2 bag ``psgsl replay`` replays, the
-steps, the final posteriors); ``--foxglove`` streams it to Foxglove (:mod:`psgsl_pgm.ros._stream`). Without the ``ros`` extra it says in one line what to install (exit 2).
+steps, the final posteriors); ``--foxglove`` streams it to Foxglove (:mod:`psgsl_pgm.ros._stream`). Without the
+``ros`` extra it says in one line what to install (exit 2).
 """
 
 from __future__ import annotations

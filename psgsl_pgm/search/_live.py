@@ -150,8 +150,8 @@ class LiveSession:
         xy = self.space.position(np.array([dec.cell]))[0]
         goal = np.array([xy[0], xy[1], float(dec.headings[0])])
         area = float(credible_region(mine, s.credible).sum()) * self.house.grid.resolution**2
-        out = LiveStep(t_ns=int(t), position=stop, heading=float(heading), hit=bool(hit), value=float(value), posteriors=post, goal=goal,
-                       region_area=area)
+        out = LiveStep(t_ns=int(t), position=stop, heading=float(heading), hit=bool(hit), value=float(value),
+                       posteriors=post, goal=goal, region_area=area)
         self.steps.append(out)
         return out
 
@@ -164,7 +164,7 @@ class LiveSession:
 def live_subscriptions(topics: dict | None = None, types: dict | None = None) -> tuple:
     """``(role -> topic, topic -> message type)`` of the node: :data:`DEFAULT_TOPICS` with ``topics`` (role ->
     topic) and ``types`` (role -> message type, one of :data:`psgsl_pgm.ros.ROLES`' for the role) applied;
-    ``/tf_static`` joins a ``/tf`` pose."""
+    ``/tf_static`` is always read."""
     topics, types = dict(topics or {}), dict(types or {})
     for what, table in (("topics", topics), ("types", types)):
         bad = sorted(set(table) - set(DEFAULT_TOPICS))
@@ -182,8 +182,7 @@ def live_subscriptions(topics: dict | None = None, types: dict | None = None) ->
             raise ValueError(f"topic {topic} given for two roles with different types, {subs[topic]} and {msgtype}")
         roles[role] = topic
         subs[topic] = msgtype
-    if subs[roles["pose"]] == TF:
-        subs.setdefault("/tf_static", TF)
+    subs.setdefault("/tf_static", TF)  # places the sensors and the camera on the robot, whatever gives its pose
     return roles, subs
 
 

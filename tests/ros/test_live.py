@@ -362,26 +362,29 @@ class _Playback:
         self.published.append((topic, message))
 
 
-def test_message_by_message_a_robots_bag_gives_the_replays_posteriors(tmp_path):
-    """The foreign bag's first 6 s (jittered stamps, map -> odom -> base_link, 10 Hz gas, a 4 Hz anemometer turned by 90°,
-    detections in a camera frame, another robot's frames) fed one message at a time: every reading becomes a step
-    as soon as the next one and its pose and wind have come, from a window of the messages, and the posteriors
-    are the offline replay's bit for bit."""
+@pytest.mark.parametrize("pose", [("/tf", "tf2_msgs/msg/TFMessage"),
+                                  ("/amcl_pose", "geometry_msgs/msg/PoseWithCovarianceStamped")])
+def test_message_by_message_a_robots_bag_gives_the_replays_posteriors(tmp_path, pose):
+    """The foreign bag's first 6 s (jittered stamps, map -> odom -> base_link or a 5 Hz localisation, 10 Hz gas,
+    a 4 Hz anemometer turned by 90°, detections in a camera frame, another robot's frames) fed one message at a
+    time: every reading becomes a step as soon as the next one and its pose and wind have come, from a window of
+    the messages, and the posteriors are the offline replay's bit for bit."""
     from .bags import rewrite
     from .test_ros_foreign_bag import T0, make_bag
 
     make_bag(tmp_path / "robot_bag", "mcap")
     path = rewrite(tmp_path / "robot_bag", tmp_path / "first_6s",  # the last reading between two wind samples
                    keep=lambda topic, t, msg: t <= T0 + (5.6 if topic == "/PID/Sensor_reading" else 6.0) * 1e9)
-    roles, subs = live_subscriptions(topics={"gas": "/PID/Sensor_reading", "wind": "/Anemometer/WindSensor_reading"},
-                                     types={"wind": "olfaction_msgs/msg/Anemometer"})
+    roles, subs = live_subscriptions(topics={"gas": "/PID/Sensor_reading", "wind": "/Anemometer/WindSensor_reading",
+                                             "pose": pose[0]},
+                                     types={"wind": "olfaction_msgs/msg/Anemometer", "pose": pose[1]})
     rows = _bag_messages(path, set(subs))
     feed = _Playback(rows)
     session = LiveSession(policy=POLICY)
     taken_at = []
     result = run_live(feed, session, roles=roles, subs=subs, latency=0.0, poll=0.0,
                       stop=lambda: feed.i >= len(rows), on_step=lambda s: taken_at.append(feed.i))
-    offline = replay(path, tolerance=0.5, keep_posteriors=True)
+    offline = replay(path, tolerance=0.5, keep_posteriors=True, topics={"pose": pose[0]})
     n = offline.run.n_steps
     assert len(result["steps"]) == n and n >= 55
     for k, s in enumerate(result["steps"]):
