@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ._grid import (
     MAX_SEEDS,
+    add_end_argument,
     add_found_arguments,
     add_scheduler_argument,
     add_workers_argument,
@@ -79,6 +80,7 @@ def add_parser(subparsers):
                    help="room types of every generated home, one per room (Kitchen Bathroom Bedroom LivingRoom "
                    "Hallway)")
     add_found_arguments(p)
+    add_end_argument(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
     add_world_model_argument(p)
@@ -107,7 +109,7 @@ def _run(args) -> int:
     if args.world is not None and options:
         raise ValueError("--rooms, --area and --room-types shape generated homes; they do not apply with --world")
     geometry = {k: v for k, v in (("found_radius", args.found_radius), ("clearance", args.clearance)) if v is not None}
-    search = SearchConfig(time_budget=args.budget, **geometry)
+    search = SearchConfig(time_budget=args.budget, end=args.end, **geometry)
     from ..experiment import ExperimentConfig
 
     config = ExperimentConfig(world_model=world_model(args.world_model))

@@ -163,6 +163,41 @@ def add_found_arguments(parser) -> None:
                         "(default: the world file's 'clearance', else 0.25)")
 
 
+def add_split_arguments(parser) -> None:
+    """``--split``, ``--seeds`` and ``--first-seed``, shared by ``psgsl search`` and ``psgsl experiment`` (read by
+    :func:`split_seeds`)."""
+    from ..search._split import SPLITS, TEST_SEEDS
+
+    parser.add_argument("--split", choices=SPLITS, default="dev",
+                        help=f"development seeds (dev: N..N+S-1) or the test seeds, run once per release (test: "
+                        f"{TEST_SEEDS.start}-{TEST_SEEDS.stop - 1}; no --first-seed) (default: %(default)s)")
+    parser.add_argument("--seeds", type=seed_count, default=None,
+                        help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: 10; with --split "
+                        f"test the first S test seeds, default all {len(TEST_SEEDS)})")
+    parser.add_argument("--first-seed", default=None, metavar="N",
+                        help="first seed N of the dev split, an integer >= 0 (default: 0)")
+
+
+def split_seeds(args) -> range:
+    """The seeds of ``--split``, ``--seeds`` and ``--first-seed`` (:func:`psgsl_pgm.search._split.house_seeds`):
+    ValueError (one line, exit 2) for a test split with ``--first-seed``, too many seeds or a bad first seed."""
+    from ..search._split import house_seeds
+
+    if args.split == "test":
+        return house_seeds("test", seeds=args.seeds, first_seed=args.first_seed)
+    seeds = seed_range("0" if args.first_seed is None else args.first_seed, 10 if args.seeds is None else args.seeds)
+    return house_seeds("dev", seeds=len(seeds), first_seed=seeds.start)
+
+
+def add_end_argument(parser) -> None:
+    """``--end``, shared by ``psgsl search`` and ``psgsl benchmark``: how a closed-loop run ends
+    (:class:`psgsl_pgm.search.SearchConfig` ``end``)."""
+    parser.add_argument("--end", choices=("declare", "reach"), default="declare",
+                        help="declare: a run ends at the robot's first declaration, a success when within 1 m of the "
+                        "source; reach: when the robot first passes within the found radius of the source (the rule "
+                        "of earlier results) (default: %(default)s)")
+
+
 def add_world_arguments(parser) -> None:
     """``--world`` and ``--sources``, shared by ``psgsl experiment`` and ``psgsl search`` (read by
     :func:`world_sources`)."""

@@ -26,11 +26,12 @@ from ._grid import (
     add_scheduler_argument,
     add_workers_argument,
     add_world_arguments,
+    add_split_arguments,
     add_world_model_argument,
     interrupted,
     positive_int,
     seed_count,
-    seed_range,
+    split_seeds,
     world_model,
     world_sources,
 )
@@ -96,7 +97,7 @@ def _experiment(args) -> int:
     from ..io._output import check_output_dir
     from ..runs._runner import GridInterrupted
 
-    seeds = seed_range(args.first_seed, args.seeds)  # a bad --first-seed: one line, exit 2, nothing written
+    seeds = split_seeds(args)  # a bad --first-seed or a test split with one: one line, exit 2, nothing written
     spec, names, sources = world_sources(args)
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology,
@@ -230,10 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
     add_world_arguments(exp)
-    exp.add_argument("--seeds", type=seed_count, default=10,
-                     help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: %(default)s)")
-    exp.add_argument("--first-seed", default="0", metavar="N",
-                     help="first seed N, an integer >= 0: held-out seeds for runs never used in tuning (default: 0)")
+    add_split_arguments(exp)
     exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=list(ESTIMATORS),
                      help="olfactory estimators (default: both)")
     add_ontology_argument(exp)

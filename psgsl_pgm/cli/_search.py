@@ -8,6 +8,8 @@ from pathlib import Path
 
 from ._grid import (
     MAX_SEEDS,
+    add_end_argument,
+    add_split_arguments,
     add_found_arguments,
     add_missed_hits_argument,
     missed_hit_rate,
@@ -16,11 +18,11 @@ from ._grid import (
     add_workers_argument,
     add_world_arguments,
     add_world_model_argument,
+    split_seeds,
     interrupted,
     positive_float,
     positive_int,
     seed_count,
-    seed_range,
     world_model,
     world_sources,
 )
@@ -39,26 +41,22 @@ def add_parser(subparsers):
     p = subparsers.add_parser("search", help="closed-loop search: policies × variants in the house (resumable), "
                               "or --open-space: the Loisy & Eloy benchmark")
     add_world_arguments(p)
-    p.add_argument("--policies", nargs="+", choices=POLICIES, default=["tour", "infotaxis", "space-aware-infotaxis"],
-                   help="policies (default: %(default)s)")
+    p.add_argument("--policies", nargs="+", choices=POLICIES,
+                   default=["tour", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object"],
+                   help="policies; the semantics-alone baselines semantic-modes and nearest-object run only with "
+                   "semantic variants (default: %(default)s)")
     p.add_argument("--variants", nargs="+", choices=VARIANTS, default=["olfaction", "semantics+rooms"],
                    help="information variants (default: %(default)s)")
     p.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis"],
                    help="olfactory estimators (default: %(default)s)")
-    p.add_argument("--split", choices=SPLITS, default="dev",
-                   help=f"development seeds (dev: N..N+S-1) or the test seeds, run once per release (test: "
-                   f"{TEST_SEEDS.start}-{TEST_SEEDS.stop - 1}; no --first-seed) (default: %(default)s)")
-    p.add_argument("--seeds", type=seed_count, default=None,
-                   help=f"number of seeds S, at most {MAX_SEEDS}: seeds N..N+S-1 (default: 10; with --split test "
-                   f"the first S test seeds, default all {len(TEST_SEEDS)})")
-    p.add_argument("--first-seed", default=None, metavar="N",
-                   help="first seed N of the dev split, an integer >= 0 (default: 0)")
+    add_split_arguments(p)
     p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
     p.add_argument("--score", choices=SCORES, default="per-time",
                    help="how infotaxis and space-aware infotaxis score a pose: gain per second, or gain alone "
                    "(default: %(default)s)")
     add_found_arguments(p)
+    add_end_argument(p)
     add_ontology_argument(p)
     add_missed_hits_argument(p)
     add_world_model_argument(p)
@@ -112,27 +110,21 @@ def format_search_table(summary: dict) -> str:
     """One line per ``"<policy>/<variant>"``: success rate [Wilson 95 %], RMST [95 % CI], Kaplan–Meier median,
     final coverage of the 90 % region, runs."""
     lines = [f"{'policy/variant':<36} {'success [95% CI]':>22} {'RMST, s [95% CI]':>24} {'median':>7} "
-             f"{'cov90':>6} {'n':>3}"]
+             f"{'false':>6} {'cov90':>6} {'n':>3}"]
     for key, s in summary.items():
         sr, r = s["success_rate"], s["rmst"]
         lo, hi = r["ci95"]
         lines.append(f"{key:<36} {sr['value']:6.2f} [{sr['ci95'][0]:.2f}, {sr['ci95'][1]:.2f}]      "
                      f"{r['value']:7.1f} [{_num(lo, '6.1f')}, {_num(hi, '6.1f')}] "
-                     f"{_num(s['time_to_find']['median'], '7.1f'):>7} {s['coverage90']['final']:6.2f} "
+                     f"{_num(s['time_to_find']['median'], '7.1f'):>7} "
+                     f"{_num((s.get('false_declaration_rate') or {}).get('value'), '6.2f'):>6} "
+                     f"{s['coverage90']['final']:6.2f} "
                      f"{s['n_runs']:3d}")
-    lines.append("(RMST: restricted mean time to find within the budget, Kaplan-Meier, Greenwood 95 % CI; median: "
-                 "Kaplan-Meier, n/a when not reached; cov90: runs whose 90 % region holds the source at the end)")
+    lines.append("(success: a declaration within 1 m of the source (--end reach: passing within the found radius); "
+                 "RMST: restricted mean time to success within the budget, Kaplan-Meier, Greenwood 95 % CI; median: "
+                 "Kaplan-Meier, n/a when not reached; false: wrong declarations of those made; cov90: runs whose 90 % "
+                 "region holds the source at the end)")
     return "\n".join(lines)
-
-
-def _seeds(args) -> range:
-    """The seeds of ``--split``, ``--seeds`` and ``--first-seed`` (:func:`psgsl_pgm.search._split.house_seeds`)."""
-    from ..search._split import house_seeds
-
-    if args.split == "test":
-        return house_seeds("test", seeds=args.seeds, first_seed=args.first_seed)
-    seeds = seed_range("0" if args.first_seed is None else args.first_seed, 10 if args.seeds is None else args.seeds)
-    return house_seeds("dev", seeds=len(seeds), first_seed=seeds.start)
 
 
 def run(args) -> int:
@@ -152,7 +144,7 @@ def _run(args) -> int:
 
     # a bad --first-seed, a test split with --first-seed or too many seeds, dev seeds in the test set: one line,
     # exit 2, nothing written
-    seeds = _seeds(args)
+    seeds = split_seeds(args)
     spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
     gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
     config = ExperimentConfig(off_ontology=args.off_ontology, missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
@@ -169,7 +161,7 @@ def _run(args) -> int:
 
         check_record_extra()
     try:
-        search = SearchConfig(time_budget=args.budget, score=args.score, **geometry)
+        search = SearchConfig(time_budget=args.budget, score=args.score, end=args.end, **geometry)
         summaries = run_search_grid(sources, args.policies, args.variants, args.estimators, seeds,
                                     out=args.out, workers=args.workers, search=search, config=config,
                                     progress=not args.quiet, figures=not args.no_figures, scheduler=args.scheduler,

@@ -21,6 +21,9 @@ detector model estimated on reference houses.
   metal-oxide sensor the robot thresholds the rate of rise, for a photo-ionisation detector the
   baseline-subtracted level (:class:`psgsl_pgm.olfaction.HitRule`, noise and baseline estimated online from its
   own readings).
+* **Source detector.** The probability m that a pass within reach of a source does not detect it is counted on
+  reference passes of the robot's own detector (:func:`robot_source_miss_probability`): a detector that missed
+  k of n passes has m = k / n, never the simulator's parameter.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ from ..sim._classes import OTHER, match_names
 from ..sim._house_ontology import REFERENCE_SEEDS
 from ._tour import exploration_tour
 
-__all__ = ["robot_detector_model", "robot_hit_rule", "wind_basis"]
+__all__ = ["robot_detector_model", "robot_hit_rule", "robot_source_miss_probability", "wind_basis"]
 
 _STOP_STRIDE = 3  # frames at every third stop of each reference tour (~10^6 labelled cells over ten houses)
 
@@ -137,3 +140,42 @@ def robot_detector_model(classes=HOUSE_CLASSES, *, reference_seeds=REFERENCE_SEE
     if realistic:
         return _estimated(seeds, float(pseudo_count), int(frame_seed), True)
     return _estimated(seeds, float(pseudo_count), int(frame_seed))
+
+
+#: Reference passes counted per estimate of the source detector's miss probability (standard error ≤ 0.025).
+SOURCE_PASSES = 400
+
+
+@lru_cache(maxsize=8)
+def robot_source_miss_probability(world_model="ideal", *, passes: int = SOURCE_PASSES, seed: int = 0) -> float:
+    """The robot's estimate of its source detector's miss probability m (module docstring).
+
+    Parameters
+    ----------
+    world_model : str or WorldModel
+        The world whose detector the robot carries (:class:`psgsl_pgm.sim.WorldModel`).
+    passes : int, keyword-only
+        Reference passes within reach of a source, each one detection trial of the detector.
+    seed : int, keyword-only
+        Seed of the reference trials (never an evaluated episode's).
+
+    Returns
+    -------
+    float
+        k / n, the fraction of reference passes that did not detect the source.
+
+    Examples
+    --------
+    >>> robot_source_miss_probability("ideal")
+    0.0
+    """
+    from ..sim import WorldModel
+
+    model = world_model if isinstance(world_model, WorldModel) else WorldModel.parse(world_model)
+    n = int(passes)
+    if n < 1:
+        raise ValueError(f"passes must be a positive number of reference passes, got {passes!r}")
+    detector = model.source_detector()
+    rng = np.random.default_rng([int(seed), 0x5DE7])
+    missed = sum(not detector.detects(True, rng) for _ in range(n))
+    return missed / n

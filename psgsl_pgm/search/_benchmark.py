@@ -45,7 +45,7 @@ from ._store import read_run_key, write_search_run
 __all__ = ["BENCHMARK_POLICIES", "BENCHMARK_VARIANTS", "benchmark_arms", "benchmark_episode", "run_benchmark"]
 
 #: The benchmark's default policies: the four closed-loop baselines and semantics alone.
-BENCHMARK_POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes")
+BENCHMARK_POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object")
 #: The default variants: the olfactory estimator alone, and fused with semantics and the room map.
 BENCHMARK_VARIANTS = ("olfaction", "semantics+rooms")
 

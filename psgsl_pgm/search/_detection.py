@@ -256,6 +256,17 @@ class DetectionModel:
         with np.errstate(divide="ignore"):
             return np.log(self.not_found_likelihood(points))
 
+    def found_log_likelihood(self, points) -> np.ndarray:
+        """(H·W,) log P(found at the last of ``points`` | s = c), up to a constant: 0 on every hypothesis found from
+        the last point and from no earlier one (the move's one detection trial fires at the first point within
+        reach of the source), −inf elsewhere."""
+        p = self._points(points)
+        out = np.full(self.centres.shape[0], -np.inf)
+        out[self._found_along(p[-1:])] = 0.0
+        if len(p) > 1:
+            out[self._found_along(p[:-1])] = -np.inf
+        return out
+
     def found_probability(self, posterior, rows) -> np.ndarray:
         """(K,) P_f = (1 − m) Σ_{c ∈ row} p(c) for each row of hypotheses (from :meth:`cell_rows`)."""
         post = np.asarray(posterior, dtype=np.float64).ravel()

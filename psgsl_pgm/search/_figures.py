@@ -10,7 +10,7 @@ __all__ = ["plot_paths", "plot_survival"]
 
 
 def plot_survival(groups: dict, *, title: str = ""):
-    """Kaplan–Meier curves P(not found by t) with their 95 % pointwise bands, one per ``"<policy>/<variant>"``.
+    """Kaplan–Meier curves P(no success by t) with their 95 % pointwise bands, one per ``"<policy>/<variant>"``.
 
     Each curve is :func:`psgsl_pgm.search._survival.kaplan_meier` of the runs' times to find, censored at the
     budget; its band (log(−log) Greenwood) is shaded in the curve's colour, and the legend gives the RMST with
@@ -29,8 +29,8 @@ def plot_survival(groups: dict, *, title: str = ""):
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for i, (key, runs) in enumerate(groups.items()):
         policy, variant = key.split("/")
-        t = [r.time_to_find for r in runs]
-        found = np.array([r.found for r in runs])
+        t = [r.time_to_success for r in runs]
+        found = np.array([r.succeeded for r in runs])
         km = kaplan_meier(t, found)
         area = rmst(t, found, budget)
         x = np.append(km["t"], budget)  # the last step holds until the budget
@@ -42,13 +42,13 @@ def plot_survival(groups: dict, *, title: str = ""):
         ax.fill_between(x, np.append(km["lower"], km["lower"][-1]), np.append(km["upper"], km["upper"][-1]),
                         step="post", color=c, alpha=0.12, lw=0)
     ax.set_xlabel("simulated time since the start, t [s]")
-    ax.set_ylabel("P(not found by t) [-], Kaplan–Meier")
+    ax.set_ylabel("P(no success by t) [-], Kaplan–Meier")
     ax.set_xlim(0, budget)
     ax.set_ylim(-0.02, 1.02)
     ax.grid(alpha=0.3)
     fig.legend(fontsize=7, loc="outside lower center", ncols=2, frameon=False)
     ax.set_title((title + "\n" if title else "") + "survival with 95 % pointwise bands (log(−log) Greenwood); "
-                 "runs not found censored at the budget", fontsize=8)
+                 "runs without success censored at the budget", fontsize=8)
     return fig
 
 
@@ -82,7 +82,12 @@ def plot_paths(runs: dict, house, *, title: str = "", floor: float = 1e-6):
         ax.plot(r.path[:, 0], r.path[:, 1], color="white", lw=1.0)
         ax.plot(*r.path[0], "o", color="white", ms=5, mec="k")
         ax.plot(*r.source_xy, "*", color="red", ms=11, mec="k")
-        state = f"found at {r.time_to_find:.0f} s" if r.found else f"not found in {r.time_to_find:.0f} s"
+        if r.end == "declare":
+            state = (f"declared at {r.time_to_declare:.0f} s, {r.declared_error:.1f} m off"
+                     + ("" if r.declared_correct else " (wrong)") if r.declared else f"no declaration in "
+                     f"{r.time_to_success:.0f} s")
+        else:
+            state = f"found at {r.time_to_find:.0f} s" if r.found else f"not found in {r.time_to_find:.0f} s"
         ax.set_title(f"{key}\n{state}, {r.driven:.1f} m", fontsize=8)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")

@@ -17,7 +17,7 @@ from ..experiment._metrics import calibration_summary, mean_ci
 from ..io._json import json_safe
 from ..runs._key import digest, run_key, world_key
 from ._loop import SearchConfig, run_closed_loop
-from ._metrics import wilson_interval
+from ._metrics import declaration_summary, wilson_interval
 from ._split import split_of_seeds
 from ._policies import POLICIES, SEMANTICS_ALONE, check_semantics_alone
 from ._store import load_search_run, read_run_key, search_run_path, write_search_run
@@ -75,28 +75,42 @@ def _budget(runs) -> float:
 def summarize_runs(runs) -> dict:
     """Statistics of one policy × variant over its runs (see :func:`run_search_grid`).
 
-    Times to find are censored at the budget τ (:mod:`psgsl_pgm.search._survival`): ``km`` is the Kaplan–Meier
-    curve of P(not found by t) with 95 % log(−log) Greenwood bands, ``rmst`` the restricted mean time to find
+    A run succeeds with a right declaration (:attr:`SearchRun.succeeded`; runs with ``end="reach"``: the find).
+    Times to success are censored at the budget τ (:mod:`psgsl_pgm.search._survival`): ``km`` is the Kaplan–Meier
+    curve of P(no success by t) with 95 % log(−log) Greenwood bands, ``rmst`` the restricted mean time to success
     RMST(τ) = ∫₀^τ S(t) dt with its 95 % Greenwood interval, ``time_to_find.median`` the Kaplan–Meier median (None
-    when more than half of the runs are not found). ``coverage90``, ``region_area90`` and ``hpd_level`` measure the
+    when more than half of the runs do not succeed). ``declared_success``, ``declared_error`` and
+    ``false_declaration_rate`` describe the declarations (:func:`psgsl_pgm.search._metrics.declaration_summary`);
+    ``reach`` the secondary time of the first pass within the found radius of the source. ``coverage90``, ``region_area90`` and ``hpd_level`` measure the
     calibration of the declared credible region (:func:`psgsl_pgm.experiment._metrics.calibration_summary`);
     ``mean_error`` is the error averaged over the search time (:func:`_time_mean`). ``split`` is the seeds'
     split (:func:`psgsl_pgm.search._split.split_of_seeds`: ``"dev"``, ``"test"`` or ``"mixed"``).
     """
     runs = list(runs)
-    found = np.array([r.found for r in runs])
-    t = np.array([r.time_to_find for r in runs])
+    found = np.array([r.succeeded for r in runs])
+    t = np.array([r.time_to_success for r in runs])
     n = len(runs)
     budget = _budget(runs)
     km = kaplan_meier(t, found)
     area = rmst(t, found, budget)
     ratio = np.array([r.path_ratio for r in runs])
+    reached = np.array([r.found for r in runs])
+    t_reach = np.array([r.time_to_find for r in runs])
+    reach_area = rmst(t_reach, reached, budget)
+    ends = sorted({r.end for r in runs})
     return {
         "n_runs": n,
+        "end": ends[0] if len(ends) == 1 else "mixed",
         "success_rate": {"value": float(found.mean()), "ci95": wilson_interval(int(found.sum()), n)},
         "time_to_find": {"median": km_median(km), "not_found": int((~found).sum()), "budget": budget,
-                         "note": "Kaplan-Meier median (None: not reached within the budget)"},
+                         "note": "Kaplan-Meier median of the time to success (None: not reached within the budget)"},
         "rmst": {"value": area["value"], "ci95": area["ci95"], "tau": budget},
+        **(declaration_summary([r.declared for r in runs], [r.declared_correct for r in runs],
+                               [r.declared_error for r in runs]) if ends == ["declare"] else
+           dict.fromkeys(("declared", "declared_success", "declared_error", "false_declaration_rate"))),
+        "reach": {"success_rate": {"value": float(reached.mean()), "ci95": wilson_interval(int(reached.sum()), n)},
+                  "rmst": {"value": reach_area["value"], "ci95": reach_area["ci95"], "tau": budget},
+                  "note": "secondary: the first pass within the found radius of the source, which ends no run"},
         "km": km,
         "path_ratio": mean_ci(ratio),
         **calibration_summary(runs),
@@ -141,16 +155,17 @@ def _paired(groups: dict, *, source=None, estimator=None) -> dict:
             if len(seeds) < 2:
                 continue
             budget = _budget([a[s] for s in seeds] + [b[s] for s in seeds])
-            cmp = paired_comparison([a[s].time_to_find for s in seeds], [b[s].time_to_find for s in seeds], budget)
+            cmp = paired_comparison([a[s].time_to_success for s in seeds], [b[s].time_to_success for s in seeds],
+                                    budget)
             name = f"{key} - {ref}"
             primary = (source, estimator, name) == (PRIMARY["source"], PRIMARY["estimator"], PRIMARY["comparison"])
             out[name] = {
                 "rmst_difference": {"value": cmp["value"], "ci95": cmp["ci95"], "interval": cmp["interval"]},
                 "p_value": cmp["p_value"], "test": cmp["test"], "primary": primary, "exploratory": not primary,
                 "n": cmp["n"],
-                "seeds": seeds, "found": {"A": int(sum(a[s].found for s in seeds)),
-                                          "B": int(sum(b[s].found for s in seeds))},
-                "direction": "A - B, s: negative when A finds the source sooner",
+                "seeds": seeds, "found": {"A": int(sum(a[s].succeeded for s in seeds)),
+                                          "B": int(sum(b[s].succeeded for s in seeds))},
+                "direction": "A - B, s: negative when A succeeds sooner",
             }
     secondary = [k for k, v in out.items() if not v["primary"]]
     adjusted = holm([out[k]["p_value"] for k in secondary]) if secondary else []
@@ -169,7 +184,8 @@ def _write_json(obj, path: Path) -> None:
 
 _CSV = ("source", "estimator", "policy", "variant", "seed", "found", "time_to_find", "driven", "geodesic",
         "path_ratio", "n_steps", "final_error", "final_map_error", "final_spread", "final_region_area",
-        "final_region_hit", "final_hpd_level", "mean_error")
+        "final_region_hit", "final_hpd_level", "mean_error", "end", "declared", "time_to_declare",
+        "declared_x", "declared_y", "declared_error", "declared_correct", "succeeded", "time_to_success")
 
 
 def _write_csv(runs, path: Path) -> None:
@@ -182,7 +198,9 @@ def _write_csv(runs, path: Path) -> None:
                         f"{r.driven:.6g}", f"{r.geodesic:.6g}", f"{r.path_ratio:.6g}", r.n_steps,
                         f"{r.error[-1]:.6g}", f"{r.map_error[-1]:.6g}", f"{r.spread[-1]:.6g}",
                         f"{r.region_area[-1]:.6g}", int(r.region_hit[-1]), f"{r.hpd_level[-1]:.6g}",
-                        f"{_time_mean(r.time, r.error):.6g}"])
+                        f"{_time_mean(r.time, r.error):.6g}", r.end, int(r.declared), f"{r.time_to_declare:.6g}",
+                        f"{r.declared_xy[0]:.6g}", f"{r.declared_xy[1]:.6g}", f"{r.declared_error:.6g}",
+                        int(r.declared_correct), int(r.succeeded), f"{r.time_to_success:.6g}"])
     os.replace(tmp, path)
 
 

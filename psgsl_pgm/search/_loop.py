@@ -48,17 +48,21 @@ from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
-from .._shared._validate import index, positive, real_pair, unit_interval
+from .._shared._validate import index, one_of, positive, real_pair, unit_interval
 from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import _error_and_spread
 from ..experiment._step import VariantPosteriors, robot_hit_rule, start_run, visit
 from ..experiment._tour import exploration_tour
+from ._declare import declaration_error, propose_declaration
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
 from ._policies import POLICIES, Situation, check_score, check_semantics_alone, choose
 from ._space import FreeSpace
 
-__all__ = ["SearchConfig", "SearchRun", "run_closed_loop"]
+__all__ = ["ENDS", "SearchConfig", "SearchRun", "run_closed_loop"]
+
+#: How a run may end (:class:`SearchConfig` ``end``).
+ENDS = ("declare", "reach")
 
 
 @dataclass(frozen=True)
@@ -89,9 +93,23 @@ class SearchConfig:
     far_spacing : float or None
         m, lattice spacing of the candidate positions beyond ``horizon``, over the whole reachable free space
         (:mod:`psgsl_pgm.search._policies`); None: no candidates beyond the horizon.
-    miss_probability : float
-        In [0, 1): probability that a move within ``found_radius`` of the source's found region does not find
-        it (:class:`DetectionModel`); 0 is the deterministic rule.
+    miss_probability : float or None
+        In [0, 1): the robot's probability that a move within ``found_radius`` of the source's found region does
+        not detect it (:class:`DetectionModel`). None: the robot's estimate counted on reference passes of its
+        detector (:func:`psgsl_pgm.experiment.robot_source_miss_probability`) with ``end="declare"``, 0 (the
+        deterministic rule) with ``end="reach"``.
+    end : {"declare", "reach"}
+        How a run ends. ``"declare"``: at the robot's first declaration (:mod:`psgsl_pgm.search._declare`),
+        right when it lies within ``success_radius`` of the source; passing near the source is evidence, not the
+        end. ``"reach"``: when the robot's path first passes within ``found_radius`` of the source and the
+        detector fires (the rule of earlier results, kept to reproduce them; no declaration is made).
+    declare_mass : float
+        κ in (0, 1): the posterior mass within ``declare_radius`` of the most probable hypothesis's found region
+        at which the robot declares it.
+    declare_radius : float
+        m, the reach of the declared region around the declared hypothesis's found region.
+    success_radius : float
+        m: a declaration is right when it lies this close to the source (to the source object's footprint).
     """
 
     found_radius: float = 0.5
@@ -104,7 +122,11 @@ class SearchConfig:
     credible: float = 0.9
     score: str = "per-time"
     far_spacing: float | None = 1.0
-    miss_probability: float = 0.0
+    miss_probability: float | None = None
+    end: str = "declare"
+    declare_mass: float = 0.9
+    declare_radius: float = 0.5
+    success_radius: float = 1.0
 
     def __post_init__(self):
         for f in fields(self):
@@ -118,7 +140,11 @@ class SearchConfig:
             elif f.name == "credible":
                 v = unit_interval(v, "credible", low_open=True, high_open=True)
             elif f.name == "miss_probability":
-                v = unit_interval(v, "miss_probability", high_open=True)
+                v = None if v is None else unit_interval(v, "miss_probability", high_open=True)
+            elif f.name == "end":
+                v = one_of(v, "end", ENDS)
+            elif f.name == "declare_mass":
+                v = unit_interval(v, "declare_mass", low_open=True, high_open=True)
             elif f.name == "far_spacing" and v is None:
                 pass
             else:
@@ -128,11 +154,17 @@ class SearchConfig:
     def to_dict(self) -> dict:
         """The settings as JSON types. The default ``score`` is left out (as runs stored before the option
         existed have it); ``far_spacing`` and ``miss_probability`` are always written, so that runs stored
-        before the "not found" update and the far candidates — other searches — never resume into a new grid."""
+        before the "not found" update and the far candidates — other searches — never resume into a new grid.
+        The declaration settings are written with ``end="declare"`` only: a ``"reach"`` run's settings are those
+        of runs stored before declarations."""
         d = asdict(self)
         d["start"] = list(self.start)
         if d["score"] == "per-time":
             del d["score"]
+        if self.end == "reach":  # the settings of runs stored before declarations, unchanged
+            for k in ("end", "declare_mass", "declare_radius", "success_radius"):
+                del d[k]
+            d["miss_probability"] = 0.0 if self.miss_probability is None else self.miss_probability
         return d
 
 
@@ -146,8 +178,10 @@ class SearchRun:
     source_xy : (2,) ndarray
         True source position, m.
     found : bool
+        Whether the robot's true path passed within ``found_radius`` of the source's found region (with
+        ``end="reach"``: and the detector fired — the run's end).
     time_to_find : float
-        s of simulated time when found; ``time_budget`` when not (and ``found`` says so).
+        s of simulated time of that first pass; ``time_budget`` when there was none (``found`` says so).
     geodesic : float
         Geodesic distance from the start to the nearest drivable point within ``found_radius`` of the source, m.
     driven : float
@@ -175,6 +209,18 @@ class SearchRun:
     final_posterior : (H, W) ndarray of float32
     config : dict
         ``{"experiment": ExperimentConfig dict, "search": SearchConfig dict}``.
+    declared : bool
+        Whether the robot declared a source within the budget (``end="declare"``).
+    declared_xy : (2,) ndarray
+        The declared point, m (NaN without a declaration).
+    time_to_declare : float
+        s of simulated time of the declaration (NaN without one).
+    declared_error : float
+        m, distance from the declared point to the source (its object's footprint); NaN without a declaration.
+    declared_correct : bool
+        Whether the declaration lies within ``success_radius`` of the source.
+    declared_mass : float
+        The posterior mass M that backed the declaration (:mod:`psgsl_pgm.search._declare`); NaN without one.
     """
 
     source: str
@@ -201,10 +247,40 @@ class SearchRun:
     final_posterior: np.ndarray
     config: dict = field(default_factory=dict)
     hpd_level: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    declared: bool = False
+    declared_xy: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    time_to_declare: float = float("nan")
+    declared_error: float = float("nan")
+    declared_correct: bool = False
+    declared_mass: float = float("nan")
 
     @property
     def n_steps(self) -> int:
         return len(self.time) - 1
+
+    @property
+    def end(self) -> str:
+        """How the run ended (:class:`SearchConfig` ``end``; runs stored before declarations: ``"reach"``)."""
+        return str(self.config.get("search", {}).get("end", "reach"))
+
+    @property
+    def succeeded(self) -> bool:
+        """The run's success: a right declaration (``end="declare"``), or the find (``end="reach"``)."""
+        return bool(self.declared_correct) if self.end == "declare" else bool(self.found)
+
+    @property
+    def time_to_success(self) -> float:
+        """s until the success (:attr:`succeeded`), or the time budget without one: the event time of the
+        survival statistics, censored at the budget."""
+        if self.end == "reach":
+            return float(self.time_to_find)
+        budget = float(self.config["search"]["time_budget"])
+        return float(self.time_to_declare) if self.declared_correct else budget
+
+    @property
+    def false_declaration(self) -> bool:
+        """Whether the run ended in a wrong declaration."""
+        return bool(self.declared and not self.declared_correct)
 
     @property
     def path_ratio(self) -> float:
@@ -291,13 +367,25 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     r = search.found_radius
     sense_time = world.gas_sensor.window
     budget = search.time_budget
-    detection = DetectionModel.from_house(house, r, miss_probability=search.miss_probability)
+    declaring = search.end == "declare"
+    if search.miss_probability is not None:
+        robot_m = search.miss_probability
+    elif declaring:  # the robot's estimate, counted on reference passes of its detector
+        from ..experiment._robot_models import robot_source_miss_probability
+
+        robot_m = robot_source_miss_probability(config.world_model or "ideal")
+    else:
+        robot_m = 0.0
+    detection = DetectionModel.from_house(house, r, miss_probability=robot_m)
     truth_hypothesis = detection.source_cell(truth, world.source_object, house)
+    truth_region = (detection.centres[detection.region_mask(truth_hypothesis).ravel()]
+                    if world.source_object is not None else None)  # the scoring's footprint of an object source
     space.cover(detection)  # stops that can find every findable source (FreeSpace.cover)
     start_cell = space.snap(start_xy)
     # the robot searches for a source it can find: p(s) ∝ p(s) [s findable] (FreeSpace.findable)
     beliefs.condition(np.where(space.findable(detection, start_cell), 0.0, -np.inf))
-    misses = np.random.default_rng([int(seed), 0x5EA2C4]) if search.miss_probability > 0 else None
+    # end="reach": the detector's misses drawn as runs stored before declarations drew them
+    misses = (np.random.default_rng([int(seed), 0x5EA2C4]) if not declaring and robot_m > 0 else None)
 
     def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
         return detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), truth_hypothesis)
@@ -337,16 +425,20 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             recorder.step(beliefs.posteriors((variant,)), beliefs)
         return post
 
+    def arc_to(seg, k) -> float:
+        return float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0
+
     start = space.position(start_cell)
     path_pts = [start]
     length = 0.0
     found, t_found = False, 0.0  # a start within reach is found at t = 0 by the first stop's check
+    declared = None  # (Declaration, time)
     post = record(start, tour.headings[0][-1], False, 0.0)
     headings = tuple(float(h) for h in tour.headings[0])
     cell, heading = start_cell, headings[-1]
     first = True
     cache: dict = {}  # static per-cell rows of the decisions (hit model), for this run's estimator
-    while not found and world.time - t0 < budget:
+    while not (found and not declaring) and declared is None and world.time - t0 < budget:
         if first:  # the common first stop: the tour's look-around at the start
             stop, drive, turn, seg = start, 0.0, 0.0, start[None]
             first = False
@@ -369,21 +461,43 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
             cell = dec.cell
         if recorder is not None:
             recorder.choose((stop[0], stop[1], headings[0]))
-        # found on the way?
+        # within reach of the source on the way?
         hits_on_path = found_on(seg)
-        if hits_on_path.any() and (misses is None or misses.random() >= search.miss_probability):
+        detected = False
+        if not declaring:  # end="reach": the first detected pass ends the run
+            if hits_on_path.any() and (misses is None or misses.random() >= robot_m):
+                k = int(np.argmax(hits_on_path))
+                arc = arc_to(seg, k)
+                t = world.time - t0 + arc / config.speed
+                if t <= budget:
+                    found, t_found = True, t
+                    length += arc
+                    path_pts.extend(seg[1 : k + 1])
+                    world.advance(arc / config.speed)
+                    break
+        elif hits_on_path.any():
             k = int(np.argmax(hits_on_path))
-            arc = float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0
-            t = world.time - t0 + arc / config.speed
-            if t <= budget:
-                found, t_found = True, t
-                length += arc
-                path_pts.extend(seg[1 : k + 1])
-                world.advance(arc / config.speed)
-                break
+            if not found:  # the first pass within reach (a secondary time; it does not end the run)
+                t = world.time - t0 + arc_to(seg, k) / config.speed
+                if t <= budget:
+                    found, t_found = True, t
+            if world.detect_source(True):  # the detector fires at the first point within reach: the robot stops there
+                detected = True
+                seg = seg[: k + 1]
+                drive = arc_to(seg, k) if len(seg) > 1 else 0.0
+                stop = seg[-1]
+                if plan is None:
+                    cell = space.snap(stop)
         reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn,
                                       camera=not beliefs.mapped, hits=hits)
-        beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
+        if detected:  # found here: the hypotheses found first from the detection's point
+            found_ll = detection.found_log_likelihood(seg)
+            if not np.any(post.ravel()[np.isfinite(found_ll)] > 0):  # the belief cannot explain it (pose error):
+                found_ll = detection.found_log_likelihood(seg[-1:])   # found from the point, first or not
+            if np.any(post.ravel()[np.isfinite(found_ll)] > 0):  # else the robot's model has no such hypothesis
+                beliefs.condition(found_ll)
+        else:
+            beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
         beliefs.observe(stop, reading, wind, frames)
         length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
         path_pts.extend(seg[1:])
@@ -391,8 +505,19 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         if plan is not None:
             cell = space.snap(stop)
         post = record(stop, heading, reading.hit, length)
+        if declaring and world.time - t0 <= budget:
+            proposal = propose_declaration(post, detection, radius=search.declare_radius)
+            if proposal.mass >= search.declare_mass:  # the rule (module _declare): M >= κ
+                declared = (proposal, world.time - t0)
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
     arrays = {k: np.array(v) for k, v in rec.items()}
+    decl = {}
+    if declared is not None:
+        proposal, t_dec = declared
+        err = declaration_error(proposal.xy, truth, truth_region)
+        decl = {"declared": True, "declared_xy": proposal.xy, "time_to_declare": float(t_dec),
+                "declared_error": err, "declared_correct": bool(err <= search.success_radius),
+                "declared_mass": float(proposal.mass)}
     return SearchRun(label, int(seed), policy, variant, estimator, truth, bool(found),
                      float(t_found) if found else float(budget), geodesic, float(length), arrays["time"], arrays["position"],
                      arrays["heading"], arrays["hit"].astype(bool), arrays["path_length"], arrays["error"],
@@ -400,4 +525,4 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                      np.array(path_pts), post.astype(np.float32),
                      {"experiment": config.to_dict(),
                       "search": search.to_dict() | {"start": [float(v) for v in start_xy]}},  # the start used
-                     arrays["hpd_level"])
+                     arrays["hpd_level"], **decl)

@@ -9,7 +9,7 @@ from scipy import stats
 
 from ..experiment._metrics import credible_region, hpd_level, mean_ci
 
-__all__ = ["clustered_wilson", "credible_region", "hpd_level", "paired_difference", "survival", "wilson_interval"]
+__all__ = ["clustered_wilson", "credible_region", "declaration_summary", "hpd_level", "paired_difference", "survival", "wilson_interval"]
 
 
 def _wilson(p: float, n: float, level: float) -> list:
@@ -94,6 +94,51 @@ def clustered_wilson(successes, groups, *, level: float = 0.95) -> dict:
     return {"value": p, "ci95": _wilson(p, n_eff, level), "design_effect": deff, "n_effective": n_eff, "n": int(n),
             "groups": n_groups,
             "interval": "Wilson score interval on the effective sample size n / design effect (house-clustered)"}
+
+
+def declaration_summary(declared, correct, errors, *, groups=None) -> dict:
+    """The declarations of an arm's runs (:mod:`psgsl_pgm.search._declare`).
+
+    Parameters
+    ----------
+    declared, correct : (n,) array_like of bool
+        Each run's declaration, and whether it was right.
+    errors : (n,) array_like of float
+        m, each declaration's error (NaN where none was made).
+    groups : (n,) array_like, optional, keyword-only
+        House labels: the success interval is then house-clustered (:func:`clustered_wilson`).
+
+    Returns
+    -------
+    dict
+        ``declared_success`` {value, ci95}: runs with a right declaration, of all runs (Wilson);
+        ``declared_error`` {median, q90, n} (m) over the declarations made (None without any);
+        ``false_declaration_rate`` {value, ci95, n}: wrong declarations of the declarations made (Wilson; None
+        without any); ``declared`` the number of declarations.
+
+    Examples
+    --------
+    >>> s = declaration_summary([True, True, False], [True, False, False], [0.2, 3.0, float("nan")])
+    >>> s["declared_success"]["value"], s["false_declaration_rate"]["value"], s["declared_error"]["median"]
+    (0.3333333333333333, 0.5, 1.6)
+    """
+    declared = np.asarray(declared, dtype=bool)
+    correct = np.asarray(correct, dtype=bool) & declared
+    errors = np.asarray(errors, dtype=np.float64)[declared]
+    n, k = declared.size, int(declared.sum())
+    if groups is None:
+        success = {"value": float(correct.mean()) if n else float("nan"), "ci95": wilson_interval(int(correct.sum()), n)}
+    else:
+        c = clustered_wilson(correct, groups)
+        success = {"value": c["value"], "ci95": c["ci95"], "design_effect": c["design_effect"]}
+    wrong = int(k - correct.sum())
+    return {
+        "declared": k,
+        "declared_success": success,
+        "declared_error": ({"median": float(np.median(errors)), "q90": float(np.quantile(errors, 0.9)), "n": k}
+                           if k else None),
+        "false_declaration_rate": ({"value": wrong / k, "ci95": wilson_interval(wrong, k), "n": k} if k else None),
+    }
 
 
 def paired_difference(a, b, *, level: float = 0.95) -> dict:

@@ -17,6 +17,9 @@ __all__ = ["read_run_key", "load_search_run", "save_search_run", "search_run_pat
 
 _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
            "region_area", "region_hit", "hpd_level", "path", "final_posterior")
+#: The declaration's scalars (:class:`SearchRun`), written by every run and absent from runs stored before
+#: declarations (read as "no declaration": those runs ended with ``end="reach"``).
+_DECLARATION = ("declared", "declared_xy", "time_to_declare", "declared_error", "declared_correct", "declared_mass")
 
 
 def search_run_path(directory, source, policy: str, variant: str, estimator: str, seed: int) -> Path:
@@ -30,7 +33,8 @@ def write_search_run(run: SearchRun, fh) -> None:
         fh, source=np.array(run.source), seed=np.array(run.seed), policy=np.array(run.policy),
         variant=np.array(run.variant), estimator=np.array(run.estimator), found=np.array(run.found),
         time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
-        config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS})
+        config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS},
+        **{k: np.asarray(getattr(run, k)) for k in _DECLARATION})
 
 
 def save_search_run(run: SearchRun, path) -> Path:
@@ -45,6 +49,11 @@ def load_search_run(path) -> SearchRun:
     try:
         with load_npy(path, str(path)) as z:
             arrays = {k: z[k] for k in _ARRAYS}
+            names = set(z.files)
+            if names & set(_DECLARATION):  # runs stored before declarations have none of them
+                arrays |= {k: z[k] for k in _DECLARATION}
+                arrays |= {k: bool(arrays[k]) for k in ("declared", "declared_correct")}
+                arrays |= {k: float(arrays[k]) for k in ("time_to_declare", "declared_error", "declared_mass")}
             return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
                              str(z["estimator"]), arrays.pop("source_xy"), bool(z["found"]),
                              float(z["time_to_find"]), float(z["geodesic"]), float(z["driven"]),

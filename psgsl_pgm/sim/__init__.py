@@ -41,6 +41,7 @@ from ._lbm import cfd_wind
 from ._objects import SceneObject, box_footprint, load_objects, save_objects
 from ._plot import figure_problems, map_norm, plot_cell_map, plot_house
 from ._pose import LocalisationError
+from ._source_detector import SourceDetector
 from ._roommap import load_room_map, save_room_map
 from ._rosmap import load_ros_map, save_ros_map
 from ._semantic_map import SemanticMap
@@ -71,6 +72,7 @@ __all__ = [
     "House",
     "LineOfSightCache",
     "LocalisationError",
+    "SourceDetector",
     "MOXSensor",
     "MOXState",
     "NOTHING",

@@ -34,6 +34,7 @@ from ._filaments import FilamentModel, FilamentParams
 from ._house import House, default_house
 from ._mox import MOXSensor, PIDSensor
 from ._pose import LocalisationError
+from ._source_detector import SourceDetector
 from ._semantic_map import SemanticMap
 from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind
@@ -64,11 +65,15 @@ class World:
         (:meth:`SceneObject.mask`), not only its centre.
     localisation : LocalisationError or None
         The robot's localisation error (None: the robot is exactly where it believes; see the module docstring).
+    source_detector : SourceDetector
+        The close-range detector that confirms the source when the robot passes within reach
+        (:meth:`detect_source`; default: one that never misses).
     """
 
     def __init__(self, house: House, wind: WindSequence, gas: FilamentModel, *, camera: Camera,
                  detector: DetectorModel, gas_sensor: GasSensor, anemometer: Anemometer, source_object=None,
-                 seed: int = 0, localisation: LocalisationError | None = None, source=None):
+                 seed: int = 0, localisation: LocalisationError | None = None, source=None,
+                 source_detector: SourceDetector | None = None):
         self.house = house
         # the source as named (an object's centre or a given point); the gas may be released beside it, where the
         # emitting object meets the air (make_world's gas_obstacles)
@@ -96,6 +101,11 @@ class World:
         # three above and the detector's errors) draws as without it
         self._rng_pose = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(0x905E,)))
         self._offsets = np.zeros((0, 3))  # e at t = k dt for k < len, drawn on demand in step order
+        if source_detector is not None and not isinstance(source_detector, SourceDetector):
+            raise TypeError(f"source_detector must be a SourceDetector or None, got {type(source_detector).__name__}")
+        self.source_detector = SourceDetector() if source_detector is None else source_detector
+        # the source detector's own stream (a fixed spawn key, as the pose's): every other stream draws as without it
+        self._rng_source = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(0x5DE7,)))
 
     @property
     def source(self) -> np.ndarray:
@@ -162,6 +172,12 @@ class World:
         out = true.copy()
         out[cut] = pts[cut, np.argmax(stop[cut], axis=1) - 1]
         return out
+
+    def detect_source(self, within_reach: bool) -> bool:
+        """One trial of the close-range source detector (:class:`SourceDetector`) for a move that did
+        (``within_reach``) or did not come within reach of the source; the closed loop decides reach with the true
+        source and the robot's true path. Never True when not within reach."""
+        return self.source_detector.detects(bool(within_reach), self._rng_source)
 
     def true_positions(self, points, *, times=None) -> np.ndarray:
         """The true positions (..., 2) of the believed positions ``points`` (..., 2), m — for the success rule
@@ -360,7 +376,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                duration: float = 600.0, camera: Camera | None = None, detector: DetectorModel | None = None,
                gas_sensor=None, anemometer: Anemometer | None = None,
                wind: WindSequence | None = None, localisation: LocalisationError | None = None,
-               gas_obstacles=None) -> World:
+               gas_obstacles=None, source_detector: SourceDetector | None = None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
 
     Parameters
@@ -396,6 +412,9 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         sensor's height in a CFD wind (:func:`psgsl_pgm.sim._lbm.cfd_obstacles`), so that filaments go round
         what the flow goes round. A source inside them releases its gas at the nearest cell outside them, where
         the emitting object meets the air; :attr:`World.source` stays the point named. Default: walls only.
+    source_detector : SourceDetector, optional, keyword-only
+        The close-range source detector (:meth:`World.detect_source`; default: one that never misses). It draws
+        from its own random stream.
 
     Returns
     -------
@@ -439,6 +458,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         seed=seed,
         localisation=localisation,
         source=None if gas_obstacles is None else source,
+        source_detector=source_detector,
     )
     world.advance(warm_up)
     return world

@@ -18,7 +18,8 @@ component     what changes
               (:meth:`Anemometer.datasheet`); the robot decides hits from the sensor's response
 ``camera``    occlusion by walls and furniture, detection that falls with range and viewing angle, labelling
               errors that persist per object and false positives that recur at the same places
-              (``Camera(occlusion="furniture")``, :meth:`DetectorModel.realistic`)
+              (``Camera(occlusion="furniture")``, :meth:`DetectorModel.realistic`); a close-range source
+              detector that misses one pass in five (:meth:`SourceDetector.realistic`)
 ``pose``      localisation error: a bounded drift between where the robot is and where it believes it is
               (:class:`LocalisationError`); the robot plans and fuses in its believed frame
 ============  ==========================================================================================
@@ -120,6 +121,13 @@ class WorldModel:
             _lbmpy()
             _check_compiler()
 
+    def source_detector(self):
+        """The close-range source detector of this model's worlds (:class:`SourceDetector`): the realistic one
+        with the ``camera`` component, one that never misses otherwise."""
+        from ._source_detector import SourceDetector
+
+        return SourceDetector.realistic() if "camera" in self else SourceDetector()
+
     def world_kwargs(self, house, *, wind_speed: float = 0.2, cfd_cache=None) -> dict:
         """Keyword arguments of :func:`psgsl_pgm.sim.make_world` that build this model's parts for ``house``.
 
@@ -157,6 +165,7 @@ class WorldModel:
 
             kwargs["camera"] = Camera(occlusion="furniture")
             kwargs["detector"] = DetectorModel.realistic(house.classes)
+            kwargs["source_detector"] = self.source_detector()
         if "pose" in self:
             from ._pose import LocalisationError
 

@@ -59,7 +59,7 @@ def test_a_short_infotaxis_run_is_consistent(house_space):
 
 def test_found_on_the_way_within_the_radius(house_space):
     _, space = house_space
-    run = run_closed_loop("2.0,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0),
+    run = run_closed_loop("2.0,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0, end="reach"),
                           space=space)
     assert run.found
     centre = house_space[0].grid.cell_to_world(house_space[0].grid.world_to_cell(run.source_xy))  # its cell's
@@ -67,6 +67,20 @@ def test_found_on_the_way_within_the_radius(house_space):
     assert d[-1] <= 0.5 < d[:-1].min()  # the path stops where it first comes within the radius
     assert run.time_to_find > run.time[-1]  # found while driving after the last stop
     assert run.path_ratio >= 1.0 - 1e-9
+    assert not run.declared and run.succeeded and run.time_to_success == run.time_to_find
+
+
+def test_a_detection_stops_the_robot_where_it_fired_and_the_declaration_ends_the_run(house_space):
+    _, space = house_space
+    reach = run_closed_loop("2.0,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0, end="reach"),
+                            space=space)
+    run = run_closed_loop("2.0,6.05", 0, "greedy", "olfaction", search=SearchConfig(time_budget=200.0), space=space)
+    assert run.found and run.time_to_find == reach.time_to_find  # the same first pass within reach
+    np.testing.assert_array_equal(run.path, reach.path)  # ... where the detection stopped the robot
+    assert run.time[-1] > run.time_to_find  # then it looked (one reading and frame) and declared
+    assert run.declared and run.time_to_declare == run.time[-1] and run.declared_mass >= 0.9
+    assert run.declared_error == pytest.approx(np.linalg.norm(run.declared_xy - run.source_xy))
+    assert run.declared_correct and run.succeeded and run.time_to_success == run.time_to_declare
 
 
 def test_store_round_trip(tmp_path, house_space):
@@ -154,6 +168,11 @@ def test_new_search_options_are_validated_and_stored():
     with pytest.raises(ValueError, match=r"miss_probability must lie in \[0, 1\)"):
         SearchConfig(miss_probability=1.0)
     with pytest.raises(TypeError, match="miss_probability"):
-        SearchConfig(miss_probability=None)
+        SearchConfig(miss_probability="often")
+    assert SearchConfig(miss_probability=None).miss_probability is None  # the robot's estimate
+    with pytest.raises(ValueError, match="end must be one of"):
+        SearchConfig(end="found")
+    with pytest.raises(ValueError, match="declare_mass must lie in"):
+        SearchConfig(declare_mass=1.0)
     d = SearchConfig(miss_probability=0.1, far_spacing=None).to_dict()
     assert d["miss_probability"] == 0.1 and d["far_spacing"] is None
