@@ -4,8 +4,8 @@ It subscribes to the robot's ``/tf`` (with ``/tf_static``), gas sensor, anemomet
 DDS names and types (:mod:`psgsl_pgm.ros._dds`), assimilates each gas reading as ``psgsl replay`` would
 (:mod:`psgsl_pgm.search._live`), and publishes the policy's next pose on ``/goal_pose``
 (``geometry_msgs/msg/PoseStamped``, what Nav2 drives to) and the posterior on ``/psgsl/posterior``
-(``nav_msgs/msg/OccupancyGrid``). It runs for ``--duration`` seconds, until the credible region is at most
-``--until-declared`` m², or until Ctrl-C. ``--out`` records the run (a ROS 2 bag ``psgsl replay`` replays, the
+(``nav_msgs/msg/OccupancyGrid``). It runs for ``--duration`` seconds, until the robot declares the source
+(``--until-declared``, the closed loop's rule), or until Ctrl-C. ``--out`` records the run (a ROS 2 bag ``psgsl replay`` replays, the
 steps, the final posteriors); ``--foxglove`` streams it to Foxglove (:mod:`psgsl_pgm.ros._stream`). Without the
 ``ros`` extra it says in one line what to install (exit 2).
 """
@@ -55,8 +55,11 @@ def add_parser(subparsers):
     p.add_argument("--posterior-topic", default="/psgsl/posterior",
                    help="where the posterior goes (default: %(default)s)")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="run this many seconds")
-    p.add_argument("--until-declared", type=float, default=None, metavar="M2",
-                   help="stop once the credible region is at most M2 square metres")
+    p.add_argument("--until-declared", action="store_true",
+                   help="stop at the first declaration (the closed loop's rule: the most probable hypothesis once "
+                   "the posterior mass within 0.5 m of its found region reaches --declare-mass)")
+    p.add_argument("--declare-mass", type=float, default=0.9, metavar="KAPPA",
+                   help="the mass at which the robot declares (default: %(default)s)")
     p.add_argument("--out", default=None, help="record the run here (live.bag, steps.csv, posterior-*.npy)")
     p.add_argument("--foxglove", type=int, nargs="?", const=8765, default=None, metavar="PORT",
                    help="stream the run to Foxglove over a WebSocket server on PORT (default 8765; 0: a free port)")
@@ -92,8 +95,11 @@ def _run(args) -> int:
         from ..io._output import check_output_dir
 
         check_output_dir(args.out)
+    from ..search import SearchConfig
+
     session = LiveSession(world=args.world, seed=args.seed, estimator=args.estimator, policy=args.policy,
-                          variant=args.variant, threshold=args.threshold)
+                          variant=args.variant, threshold=args.threshold,
+                          search=SearchConfig(declare_mass=args.declare_mass))
     pubs = {args.goal_topic: "geometry_msgs/msg/PoseStamped", args.posterior_topic: "nav_msgs/msg/OccupancyGrid"}
     clash = sorted(set(pubs) & set(subs))
     if clash:
@@ -112,13 +118,15 @@ def _run(args) -> int:
         print(f"psgsl live: Foxglove on ws://{args.foxglove_host}:{stream.port}", flush=True)
     endpoint = DdsEndpoint(subs, pubs, domain_id=domain, reliable=not args.best_effort)
     print(f"psgsl live: domain {domain}, listening to {', '.join(f'{r}={t}' for r, t in roles.items())}; goals on "
-          f"{args.goal_topic}, posterior on {args.posterior_topic}" + ("" if args.duration or args.until_declared
+          f"{args.goal_topic}, posterior on {args.posterior_topic}" + ("" if args.duration
                                                                       else "; Ctrl-C ends"), flush=True)
 
     def report(step):
         print(f"  {step.t_ns * 1e-9:.3f}: at ({step.position[0]:.2f}, {step.position[1]:.2f}) "
               f"{'hit' if step.hit else 'miss'} {step.value:g}; goal ({step.goal[0]:.2f}, {step.goal[1]:.2f}, "
-              f"{step.goal[2]:.2f} rad); 90 % region {step.region_area:.1f} m²", flush=True)
+              f"{step.goal[2]:.2f} rad); 90 % region {step.region_area:.1f} m²; declaration "
+              f"({step.declaration.xy[0]:.2f}, {step.declaration.xy[1]:.2f}) at mass {step.declaration.mass:.2f}"
+              + (", declared" if step.declared else ""), flush=True)
         if stream is not None:
             stream.step(step.t_ns, step.position, step.heading, step.posteriors, step.goal)
 

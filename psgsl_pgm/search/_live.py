@@ -41,6 +41,7 @@ from ..experiment._step import VariantPosteriors
 from ..ros._read import META_TOPIC, ROLES, TF, decode_messages
 from ..ros._time import DEFAULT_TOLERANCE
 from ..sim import Camera, DetectorModel, GasSensor, default_world, load_world
+from ._declare import propose_declaration
 from ._detection import DetectionModel
 from ._loop import SearchConfig
 from ._policies import POLICIES, Situation, check_semantics_alone, choose
@@ -60,7 +61,9 @@ DEFAULT_TOPICS = {
 class LiveStep(SimpleNamespace):
     """One step of a live session: ``t_ns``, ``position`` (2,), ``heading`` (rad, the robot's at the reading),
     ``hit``, ``value`` (ppm), ``posteriors`` (V, H, W) float64 of every variant, ``goal`` (3,) = (x, y, yaw) the
-    policy chose next, ``region_area`` (m², the session variant's credible region)."""
+    policy chose next, ``region_area`` (m², the session variant's credible region), ``declaration`` (the
+    :class:`psgsl_pgm.search._declare.Declaration` the closed loop's rule would make now: point and mass) and
+    ``declared`` (its mass reached ``search.declare_mass``)."""
 
 
 class LiveSession:
@@ -79,7 +82,8 @@ class LiveSession:
     variant : {"olfaction", "semantics", "semantics+rooms"}, keyword-only
         The posterior the policy uses and the node publishes.
     search : SearchConfig, optional, keyword-only
-        Candidate lattice, horizon, found radius and credible mass of the policy.
+        Candidate lattice, horizon, found radius and credible mass of the policy, and the declaration rule's
+        ``declare_mass`` and ``declare_radius`` (:mod:`psgsl_pgm.search._declare`, as in the closed loop).
     threshold : float, optional, keyword-only
         Gas hit threshold, ppm (default: the sensor model's, 1 ppm).
     sense_time : float, keyword-only
@@ -121,7 +125,8 @@ class LiveSession:
         self.policy, self.variant, self.threshold, self.sense_time = policy, variant, threshold, float(sense_time)
         self.space = FreeSpace(house, self.camera, clearance=search.clearance, spacing=search.spacing,
                                n_headings=search.n_headings)
-        self.detection = DetectionModel.from_house(house, search.found_radius, miss_probability=search.miss_probability)
+        miss = 0.0 if search.miss_probability is None else search.miss_probability  # no detector estimate here
+        self.detection = DetectionModel.from_house(house, search.found_radius, miss_probability=miss)
         self.space.cover(self.detection)
         self._cache: dict = {}
         self._v = VARIANTS.index(variant)
@@ -150,8 +155,10 @@ class LiveSession:
         xy = self.space.position(np.array([dec.cell]))[0]
         goal = np.array([xy[0], xy[1], float(dec.headings[0])])
         area = float(credible_region(mine, s.credible).sum()) * self.house.grid.resolution**2
+        dec_now = propose_declaration(mine, self.detection, radius=s.declare_radius)
         out = LiveStep(t_ns=int(t), position=stop, heading=float(heading), hit=bool(hit), value=float(value),
-                       posteriors=post, goal=goal, region_area=area)
+                       posteriors=post, goal=goal, region_area=area, declaration=dec_now,
+                       declared=dec_now.mass >= s.declare_mass)
         self.steps.append(out)
         return out
 
@@ -309,7 +316,7 @@ class _Stream:
 
 
 def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duration: float | None = None,
-             until_declared: float | None = None, latency: float = 0.2, tolerance: float = DEFAULT_TOLERANCE,
+             until_declared: bool = False, latency: float = 0.2, tolerance: float = DEFAULT_TOLERANCE,
              map_frame: str = "map", robot_frame: str = "base_link", goal_topic: str = "/goal_pose",
              posterior_topic: str = "/psgsl/posterior", poll: float = 0.02, stop=None, on_step=None) -> dict:
     """Run the node (see the module docstring) until ``duration``, a declaration, or ``stop()``.
@@ -325,8 +332,9 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
         Topic -> message type.
     duration : float, optional, keyword-only
         Wall-clock seconds to run; None: until declared or stopped.
-    until_declared : float, optional, keyword-only
-        Stop once the variant's credible region (``search.credible`` of the mass) is at most this many m².
+    until_declared : bool, keyword-only
+        Stop at the first step whose declaration reaches ``search.declare_mass`` (the closed loop's rule,
+        :mod:`psgsl_pgm.search._declare`).
     latency : float, keyword-only
         Wall seconds a gas reading waits after the next one arrives, for late detection arrays.
     tolerance : float, keyword-only
@@ -349,11 +357,10 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
     """
     from ..ros._dds import pose_stamped, posterior_grid
 
-    if duration is None and until_declared is None and stop is None:
+    if duration is None and not until_declared and stop is None:
         raise ValueError("run_live needs an end: duration, until_declared or stop")
-    for name, v in (("duration", duration), ("until_declared", until_declared)):
-        if v is not None and not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a positive number, got {v!r}")
+    if duration is not None and not (isinstance(duration, (int, float)) and np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
     stream = _Stream(roles, subs, tolerance)
     skipped = 0
     done, declared = 0, False
@@ -380,7 +387,7 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
                 on_step(out)
             done += 1
             stream.closed = stream.stamp_of_gas(done)
-            if until_declared is not None and out.region_area <= until_declared:
+            if until_declared and out.declared:
                 return True
         return False
 
@@ -439,10 +446,12 @@ def write_live(result: dict, session: LiveSession, out, *, subs: dict, goal_topi
 
     written = [replace_folder(out / "live.bag", write)]
     start = steps[0].t_ns if steps else 0
-    lines = ["t,x,y,hit,value,goal_x,goal_y,goal_yaw,region_area"]
+    lines = ["t,x,y,hit,value,goal_x,goal_y,goal_yaw,region_area,declare_x,declare_y,declare_mass,declared"]
     for s in steps:
+        d = s.declaration
         lines.append(",".join(f"{v:.9g}" for v in ((s.t_ns - start) * 1e-9, *s.position)) + f",{int(s.hit)},"
-                     + ",".join(f"{v:.9g}" for v in (s.value, *s.goal, s.region_area)))
+                     + ",".join(f"{v:.9g}" for v in (s.value, *s.goal, s.region_area, *d.xy, d.mass))
+                     + f",{int(s.declared)}")
     text = "\n".join(lines) + "\n"
     written.append(write_file_atomically(out / "steps.csv", lambda fh: fh.write(text.encode())))
     if steps:

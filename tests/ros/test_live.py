@@ -295,7 +295,9 @@ def test_cli_refuses_an_unknown_topic_type_in_one_line(capsys):
     assert len(err) == 1 and "wind: unknown topic type 'geometry_msgs/msg/Twist'" in err[0]
 
 
-def test_until_declared_stops_at_the_first_small_enough_region(bag, domain):
+def test_until_declared_stops_at_the_closed_loops_first_declaration(bag, domain):
+    from psgsl_pgm.search import SearchConfig
+
     roles, subs = live_subscriptions()
     node = DdsEndpoint(subs, {"/goal_pose": "geometry_msgs/msg/PoseStamped",
                               "/psgsl/posterior": "nav_msgs/msg/OccupancyGrid"}, domain_id=domain)
@@ -305,10 +307,12 @@ def test_until_declared_stops_at_the_first_small_enough_region(bag, domain):
     T = message_types()
     for topic, t, msgtype, raw in rows:
         player.publish(topic, T[msgtype].deserialize(raw), t_ns=t)
-    session = LiveSession(policy=POLICY)
-    result = run_live(node, session, roles=roles, subs=subs, until_declared=55.0, duration=5.0, poll=0.01)
-    areas = [s.region_area for s in result["steps"]]
-    assert result["declared"] and areas[-1] <= 55.0 and all(a > 55.0 for a in areas[:-1]) and len(areas) > 1
+    kappa = 0.017  # the hallway episode's masses are 0.016, 0.0175, …: the second step declares
+    session = LiveSession(policy=POLICY, search=SearchConfig(declare_mass=kappa))
+    result = run_live(node, session, roles=roles, subs=subs, until_declared=True, duration=5.0, poll=0.01)
+    masses = [s.declaration.mass for s in result["steps"]]
+    assert result["declared"] and len(masses) == 2 and masses[0] < kappa <= masses[1]
+    assert result["steps"][-1].declared and not result["steps"][0].declared
     with pytest.raises(ValueError, match="needs an end"):
         run_live(node, session, roles=roles, subs=subs)
     for e in (node, player):
@@ -342,7 +346,8 @@ def test_cli_runs_the_node_and_records_it(bag, domain, tmp_path, capsys):
     offline = replay(bag)
     final = np.load(out / "posterior-semantics+rooms.npy")
     assert np.array_equal(final, offline.final[VARIANTS.index("semantics+rooms")])
-    assert len((out / "steps.csv").read_text().splitlines()) == 7
+    table = (out / "steps.csv").read_text().splitlines()
+    assert len(table) == 7 and table[0].endswith("declare_x,declare_y,declare_mass,declared")
 
 
 class _Playback:
