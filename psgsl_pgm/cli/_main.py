@@ -17,7 +17,7 @@ import os
 import sys
 from pathlib import Path
 
-from . import _benchmark, _export, _replay, _search, _world
+from . import _benchmark, _export, _live, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
     add_missed_hits_argument,
@@ -269,6 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
     _export.add_parser(sub)
     _search.add_parser(sub)
     _replay.add_parser(sub)
+    _live.add_parser(sub)
     _benchmark.add_parser(sub)
     return parser
 

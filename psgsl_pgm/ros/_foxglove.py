@@ -40,6 +40,37 @@ def _require():
         raise ImportError(MISSING_EXTRA) from err
 
 
+def _ts(t):
+    from foxglove import messages as m
+
+    t = int(t)
+    return m.Timestamp(t // 1_000_000_000, t % 1_000_000_000)
+
+
+def _quat(yaw):
+    from foxglove import messages as m
+
+    return m.Quaternion(x=0.0, y=0.0, z=float(np.sin(yaw / 2)), w=float(np.cos(yaw / 2)))
+
+
+def _pose(x, y, yaw=0.0, z=0.0):
+    from foxglove import messages as m
+
+    return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)), orientation=_quat(yaw))
+
+
+def _grid_msg(grid, t, values, kind):
+    """A ``foxglove.Grid`` of ``values`` (H, W) on ``grid``'s cells in ``map``, row by row from the origin."""
+    from foxglove import messages as m
+
+    values = np.ascontiguousarray(values)
+    w = grid.shape[1]
+    return m.Grid(timestamp=_ts(t), frame_id="map", pose=_pose(grid.origin[0], grid.origin[1]), column_count=w,
+                  cell_size=m.Vector2(x=float(grid.resolution), y=float(grid.resolution)),
+                  row_stride=w * values.itemsize, cell_stride=values.itemsize,
+                  fields=[m.PackedElementField(name="value", offset=0, type=kind)], data=values.tobytes())
+
+
 def write_foxglove(path, episode: Episode):
     """Write ``episode`` as a Foxglove MCAP file at ``path`` (see the module docstring); returns the path."""
     if not isinstance(episode, Episode):
@@ -56,27 +87,11 @@ def _write(ep: Episode, fh) -> None:
     ctx = foxglove.Context()
     writer = foxglove.open_mcap(fh, context=ctx)
     F = m.PackedElementFieldNumericType
-
-    def ts(t):
-        t = int(t)
-        return m.Timestamp(t // 1_000_000_000, t % 1_000_000_000)
-
-    def quat(yaw):
-        return m.Quaternion(x=0.0, y=0.0, z=float(np.sin(yaw / 2)), w=float(np.cos(yaw / 2)))
-
-    def pose(x, y, yaw=0.0, z=0.0):
-        return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)), orientation=quat(yaw))
-
+    ts, quat, pose = _ts, _quat, _pose
     grid = ep.grid
-    w = grid.shape[1]
-    corner = pose(grid.origin[0], grid.origin[1])
 
     def grid_msg(t, values, kind):
-        values = np.ascontiguousarray(values)
-        return m.Grid(timestamp=ts(t), frame_id="map", pose=corner, column_count=w,
-                      cell_size=m.Vector2(x=float(grid.resolution), y=float(grid.resolution)),
-                      row_stride=w * values.itemsize, cell_stride=values.itemsize,
-                      fields=[m.PackedElementField(name="value", offset=0, type=kind)], data=values.tobytes())
+        return _grid_msg(grid, t, values, kind)
 
     t0 = int(stamp_ns(0.0))
     ch.GridChannel("/map", context=ctx).log(grid_msg(t0, np.where(grid.occupancy, 100, 0).astype(np.uint8), F.Uint8),

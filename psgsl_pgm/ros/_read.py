@@ -34,7 +34,7 @@ from ..geometry._grid import GridMap
 from ._time import DEFAULT_TOLERANCE, check_increasing, interpolate
 from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, typestore
 
-__all__ = ["META_TOPIC", "ROLES", "BagData", "Detections", "bag_topics", "read_bag"]
+__all__ = ["META_TOPIC", "ROLES", "BagData", "Detections", "bag_topics", "decode_messages", "read_bag"]
 
 TF = "tf2_msgs/msg/TFMessage"
 POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
@@ -334,6 +334,35 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
         raw = _messages(name, reader, conns, store)
     finally:
         reader.close()
+    return decode_messages(name, chosen, raw, tf_topics=tf_topics, map_frame=map_frame, robot_frame=robot_frame,
+                           tolerance=tolerance, path=Path(path))
+
+
+def decode_messages(name: str, chosen: dict, raw: list, *, tf_topics, map_frame: str, robot_frame: str,
+                    tolerance: float, path=None) -> BagData:
+    """The arrays of :class:`BagData` from decoded messages, the one conversion of a bag and of a live stream.
+
+    Parameters
+    ----------
+    name : str
+        The source for messages (the bag, or the live node's domain).
+    chosen : dict
+        Role -> topic (every role of :data:`ROLES`; None: absent).
+    raw : list of (topic, receive stamp ns, message)
+        In receive order; a message is anything with the ROS message's attribute names (rosbags' classes, the
+        Cyclone DDS structs of :mod:`psgsl_pgm.ros._dds`).
+    tf_topics : set of str, keyword-only
+        The transform topics (``/tf``, ``/tf_static``, a namespaced one).
+    map_frame, robot_frame : str, keyword-only
+    tolerance : float, keyword-only
+        Seconds (:func:`psgsl_pgm.ros._time.interpolate`).
+    path : Path, optional, keyword-only
+        ``BagData.path`` (default: ``name``).
+
+    Returns
+    -------
+    BagData
+    """
     start = min((t for _, t, _ in raw), default=0)
 
     def describe(t_ns: int) -> str:
@@ -414,8 +443,8 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     pose = tree.lookup(robot_frame, map_frame, pose_t)
     if not np.isfinite(gas_xy).all() or not np.isfinite(wind).all():
         raise ValueError(f"{name}: a gas or wind reading or its pose is not finite")
-    return BagData(Path(path), chosen, int(start), pose_t, pose, gas_t, np.asarray(gas_v), gas_xy, wind_t, wind,
-                   detections, grid, meta)
+    return BagData(Path(name) if path is None else path, chosen, int(start), pose_t, pose, gas_t, np.asarray(gas_v),
+                   gas_xy, wind_t, wind, detections, grid, meta)
 
 
 def _per_frame(tree: _Tree, t_ns: np.ndarray, frames: list, map_frame: str) -> np.ndarray:

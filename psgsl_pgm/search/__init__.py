@@ -2,7 +2,7 @@
 (Sec. "Information Gain Optimization"), the closed loop in the simulated house through the validation
 experiment's own per-step code, declarations with credible regions, the open-space benchmark, and the
 many-house benchmark (:func:`run_benchmark`: generated homes, sources drawn from the ontology, three ontology
-conditions).
+conditions), and the same estimators and policies live on a robot's ROS 2 topics (:func:`run_live`).
 """
 
 from ._benchmark import BENCHMARK_POLICIES, BENCHMARK_VARIANTS, run_benchmark
@@ -12,6 +12,7 @@ from ._detection import DetectionModel
 from ._figures import plot_paths, plot_survival
 from ._findable import check_findable, findability
 from ._grid import run_search_grid, summarize_runs, write_search_outputs
+from ._live import LiveSession, run_live, write_live
 from ._loop import SearchConfig, SearchRun, run_closed_loop
 from ._metrics import credible_region, hpd_level, paired_difference, survival, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
@@ -29,6 +30,7 @@ __all__ = [
     "Decision",
     "DetectionModel",
     "FreeSpace",
+    "LiveSession",
     "OPEN_SPACE_POLICIES",
     "OpenSpaceSearch",
     "POLICIES",
@@ -57,6 +59,7 @@ __all__ = [
     "robot_ontology",
     "run_benchmark",
     "run_closed_loop",
+    "run_live",
     "run_search_demo",
     "run_search_grid",
     "save_search_run",
@@ -66,5 +69,6 @@ __all__ = [
     "survival",
     "travel_time",
     "wilson_interval",
+    "write_live",
     "write_search_outputs",
 ]
