@@ -27,7 +27,7 @@ def add_run_arguments(ap, *, first_seed: int, seeds: int):
     ap.add_argument("--seeds", type=int, default=seeds, help="how many seeds from --first-seed")
     ap.add_argument("--sources", type=_sources, default="oven;bed;5.0,6.0",
                     help='";"-separated sources: an object\'s name or "x,y" (m)')
-    ap.add_argument("--estimators", type=_estimators, default="infotaxis,pmfs", help='","-separated estimators')
+    ap.add_argument("--estimators", type=_estimators, default="infotaxis,analytic-plume", help='","-separated estimators')
     ap.add_argument("--out", required=True)
 
 

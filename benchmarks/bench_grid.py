@@ -25,7 +25,7 @@ def _grid(out, n_runs, stops):
     from psgsl_pgm.experiment._driver import experiment_jobs
 
     seeds = range((n_runs + 1) // 2)
-    jobs = experiment_jobs(["oven"], list(seeds), ["infotaxis", "pmfs"], out=out, config=ExperimentConfig(stops=stops))
+    jobs = experiment_jobs(["oven"], list(seeds), ["infotaxis", "analytic-plume"], out=out, config=ExperimentConfig(stops=stops))
     return jobs[:n_runs]
 
 

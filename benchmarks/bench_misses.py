@@ -32,7 +32,7 @@ Usage::
 
     python benchmarks/bench_misses.py bench-50x5                       # generated homes (OUT/houses/*/world.yaml)
     python benchmarks/bench_misses.py bench-B --world house_B/world.yaml  # one world file
-    python benchmarks/bench_misses.py closed-loop-pmfs --world psgsl_pgm/data/worlds/house.yaml  # psgsl search
+    python benchmarks/bench_misses.py closed-loop-analytic-plume --world psgsl_pgm/data/worlds/house.yaml  # psgsl search
 """
 
 from __future__ import annotations

@@ -77,14 +77,14 @@ def main():
     ap.add_argument("--sweep", default=None, help="comma-separated temperings: final coverage and area at each")
     ap.add_argument("--after", default=None, help="Infotaxis β, PMFS λ after (default: the fitted ones)")
     a = ap.parse_args()
-    before = dict(zip(("infotaxis", "pmfs"), map(float, a.before.split(","))))
-    after = dict(zip(("infotaxis", "pmfs"), map(float, a.after.split(",")))) if a.after else {}
-    for est in ("infotaxis", "pmfs"):
+    before = dict(zip(("infotaxis", "analytic-plume"), map(float, a.before.split(","))))
+    after = dict(zip(("infotaxis", "analytic-plume"), map(float, a.after.split(",")))) if a.after else {}
+    for est in ("infotaxis", "analytic-plume"):
         if a.fit and est not in after:
             recs = load(a.fit, est)
             if recs:
                 after[est] = fit(recs, est)
-    for est in ("infotaxis", "pmfs"):
+    for est in ("infotaxis", "analytic-plume"):
         recs = load(a.evaluate, est)
         if not recs or est not in after:
             continue

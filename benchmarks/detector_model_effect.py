@@ -15,7 +15,7 @@ model and the paired difference simulator − estimated with its Student-t 95 % 
 censored), and the calibration at the end of the tour (coverage of the 90 % region, its mean area, the median HPD
 level of the source's cell) for each model.
 
-Run: ``python benchmarks/detector_model_effect.py OUT [--seeds 10] [--first-seed 0] [--estimators infotaxis pmfs]
+Run: ``python benchmarks/detector_model_effect.py OUT [--seeds 10] [--first-seed 0] [--estimators infotaxis analytic-plume]
 [--sources oven bed 5,6] [--workers 2]``; the runs go to ``OUT/estimated`` and ``OUT/simulator`` (resumable, as
 ``psgsl experiment``). Seeds 0–9 are the validation page's: its ``estimated`` rows are that page's table.
 """
@@ -108,7 +108,7 @@ def main(argv=None) -> int:
     ap.add_argument("out", type=Path)
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--first-seed", type=int, default=0)
-    ap.add_argument("--estimators", nargs="+", default=["infotaxis", "pmfs"])
+    ap.add_argument("--estimators", nargs="+", default=["infotaxis", "analytic-plume"])
     ap.add_argument("--sources", nargs="+", default=["oven", "bed", "5,6"])
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)

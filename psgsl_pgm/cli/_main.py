@@ -232,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     exp = sub.add_parser("experiment", help="sources × seeds × estimators, parallel and resumable")
     add_world_arguments(exp)
     add_split_arguments(exp)
-    exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis", "pmfs"],
+    exp.add_argument("--estimators", nargs="+", choices=ESTIMATORS, default=["infotaxis", "analytic-plume"],
                      help="olfactory estimators (default: %(default)s)")
     add_ontology_argument(exp)
     add_missed_hits_argument(exp)

@@ -168,11 +168,11 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     if coverage_runs is not None:
         runs_c = runs_of(coverage_runs)
         labels = np.repeat(np.arange(len(runs_c)), len(CHECKPOINTS))
-        for name in ("infotaxis", "pmfs"):
+        for name in ("infotaxis", "analytic-plume"):
             th = coverage_thresholds(runs_c, fit, name, false_hit_rate=config.false_hit_rate)
             cover[name] = coverage_tempering(th.ravel(), labels)
     return Calibration(fit, rho, beta, pmfs_tempering(data, fit), int(sum(len(r.hits) for r in data)), grid,
-                       cover.get("infotaxis"), cover.get("pmfs"))
+                       cover.get("infotaxis"), cover.get("analytic-plume"))
 
 
 def parameter_grid_weights(data, *, tempering: float, false_hit_rate: float, axes=None, drop: float = 1e-3) -> tuple:
@@ -428,7 +428,7 @@ def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: 
     run's estimated wind, a uniform prior over the free cells, as :func:`pmfs_tempering`): for ``"infotaxis"``
     :class:`psgsl_pgm.olfaction.GridInfotaxis` with β = 1, whose accumulated log-likelihood is then
     L_j(s) = Σ_k log P_θj(g_k | s) per component (``parameter_grid``: rows (D, τ, κ, weight); None: the fit), for
-    ``"pmfs"`` :class:`psgsl_pgm.olfaction.PMFSEstimator`'s untempered score S(s).
+    ``"analytic-plume"`` :class:`psgsl_pgm.olfaction.PMFSEstimator`'s untempered score S(s).
 
     The wind is the run's estimate from *all* of its readings (hindsight) and the prior covers every free cell;
     the experiment's estimator starts from a few anemometer readings and the source region's prior, so its early
@@ -438,8 +438,8 @@ def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: 
     """
     from ..olfaction import GridInfotaxis
 
-    if estimator not in ("infotaxis", "pmfs"):
-        raise ValueError(f"estimator must be 'infotaxis' or 'pmfs', got {estimator!r}")
+    if estimator not in ("infotaxis", "analytic-plume"):
+        raise ValueError(f"estimator must be 'infotaxis' or 'analytic-plume', got {estimator!r}")
     out = []
     for run in data:
         model = _fitted_model(run, fit.diffusivity, fit.lifetime, fit.encounter_scale)

@@ -10,13 +10,35 @@ from .._shared._validate import positive, real_pair
 from ..olfaction._infotaxis import _parameter_grid
 from ..runs._key import OMIT_DEFAULT
 
-__all__ = ["ESTIMATORS", "ExperimentConfig", "PARAMETER_GRID", "VARIANTS", "parse_source"]
+__all__ = ["ESTIMATORS", "ESTIMATOR_NAMING", "ExperimentConfig", "PARAMETER_GRID", "VARIANTS", "parse_source",
+           "stored_estimator_name"]
 
 #: The three variants of the paper's Fig. error-chart, in the order they are reported.
 VARIANTS = ("olfaction", "semantics", "semantics+rooms")
 
-#: Olfactory estimators p(s | g) the experiment can run.
-ESTIMATORS = ("infotaxis", "pmfs", "particle-filter")
+#: Olfactory estimators p(s | g) the experiment can run: ``analytic-plume`` is the PMFS-family score on an analytic
+#: advection-diffusion plume (:class:`psgsl_pgm.olfaction.PMFSEstimator`); ``pmfs`` is PMFS as published, with
+#: filament simulations on the GMRF wind estimate (:class:`psgsl_pgm.olfaction.FilamentPMFS`); ``grgsl`` is
+#: MAPIR's grid-based GSL (:class:`psgsl_pgm.olfaction.GrGSL`).
+ESTIMATORS = ("infotaxis", "analytic-plume", "particle-filter")
+
+#: Version of the estimator names written with every stored run (the ``estimator_naming`` field). Runs stored
+#: without the field were written when ``"pmfs"`` named the analytic-plume estimator.
+ESTIMATOR_NAMING = 2
+_LEGACY_NAMES = {"pmfs": "analytic-plume"}
+
+
+def stored_estimator_name(name: str, naming) -> str:
+    """The current name of the estimator of a stored run: ``name`` as stored, ``naming`` its file's
+    ``estimator_naming`` field (None when absent). A run stored without the field and named ``"pmfs"`` was made
+    with the analytic-plume estimator and is read as ``"analytic-plume"``.
+
+    >>> stored_estimator_name("pmfs", None), stored_estimator_name("pmfs", 2)
+    ('analytic-plume', 'pmfs')
+    """
+    if naming is None:
+        return _LEGACY_NAMES.get(name, name)
+    return name
 
 #: (D m²/s, τ s, κ m²/s, weight) of the plume parameters marginalised by the grid Infotaxis estimator
 #: (:attr:`ExperimentConfig.parameter_grid`), fitted by :func:`psgsl_pgm.experiment.calibrate`.

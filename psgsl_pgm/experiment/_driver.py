@@ -58,11 +58,12 @@ def search_in_world(source, seed, estimator, *, world=None, world_digest=None, r
                              **kwargs)
     result.config["start"] = [float(v) for v in result.position[0]]
     if recorder is not None:
-        from ._config import VARIANTS
+        from ._config import ESTIMATOR_NAMING, VARIANTS
 
         spec = parse_source(source)
         meta = {"world": world, "source": spec if isinstance(spec, str) else list(spec), "seed": int(seed),
-                "estimator": estimator, "config": {k: v for k, v in result.config.items() if k != "start"}}
+                "estimator": estimator, "estimator_naming": ESTIMATOR_NAMING,
+                "config": {k: v for k, v in result.config.items() if k != "start"}}
         recorder.write(record, variants=VARIANTS, meta=meta)
     return result
 
@@ -104,7 +105,7 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     sources : sequence of str
         Source specifications (:func:`parse_source`; with a world file also its source names).
     seeds : iterable of int
-    estimators : sequence of {"infotaxis", "pmfs"}
+    estimators : sequence of {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}
     out : path, keyword-only
         Output directory; finished runs live in ``out/runs`` and are never redone (resumable). The folder holds
         one configuration: a stored run whose run key (the world file's content and the bytes of every file it

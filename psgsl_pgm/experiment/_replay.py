@@ -38,7 +38,7 @@ from ..sim import (
     match_names,
 )
 from ..sim._camera import Frame
-from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
+from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, stored_estimator_name
 from ._run import RunResult, run_config, step_metrics
 from ._step import VariantPosteriors
 
@@ -138,7 +138,7 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
     source : str or (2,), optional, keyword-only
         The true source (class, ``"x,y"`` or a world source name), for the error; default: none (or the
         recorded episode's).
-    estimator : {"infotaxis", "pmfs"}, optional, keyword-only
+    estimator : {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}, optional, keyword-only
         Default: the recorded episode's, else ``"infotaxis"``.
     config : ExperimentConfig, optional, keyword-only
     seed : int, optional, keyword-only
@@ -171,7 +171,8 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
     if world is None and meta.get("world"):
         world = meta["world"]
     setting = default_world() if world is None else load_world(world)
-    estimator = estimator if estimator is not None else meta.get("estimator", "infotaxis")
+    if estimator is None:  # a bag recorded before "estimator_naming" names the analytic-plume estimator "pmfs"
+        estimator = stored_estimator_name(meta.get("estimator", "infotaxis"), meta.get("estimator_naming"))
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
     if seed is None:

@@ -99,7 +99,7 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
         See :func:`parse_source`: a class name (``"oven"``), a position, or a source name of the world file.
     seed : int
         Seed of the world (house jitter, wind, gas, sensors, detector).
-    estimator : {"infotaxis", "pmfs"}
+    estimator : {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}
         Olfactory estimator p(s | g).
     config : ExperimentConfig, optional, keyword-only
     snapshot_at : sequence of float, keyword-only

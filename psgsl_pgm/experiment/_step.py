@@ -41,7 +41,7 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
         :func:`parse_source`.
     seed : int
         World seed.
-    estimator : {"infotaxis", "pmfs"}
+    estimator : {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}
     config : ExperimentConfig or None
         None: the defaults.
     world : psgsl_pgm.sim.World, optional, keyword-only
@@ -89,7 +89,7 @@ def make_estimator(name, model, config, *, prior=None, seed: int = 0):
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
                                         false_hit_rate=config.false_hit_rate, missed_hit_rate=config.missed_hit_rate,
                                         parameter_grid=config.parameter_grid)
-    if name == "pmfs":
+    if name == "analytic-plume":
         return PMFSEstimator.from_model(model, prior=prior, tempering=config.pmfs_tempering)
     if name == "particle-filter":
         return ParticleFilter.from_model(model, prior=prior, tempering=config.tempering,
@@ -134,7 +134,7 @@ class VariantPosteriors:
     Parameters
     ----------
     world : psgsl_pgm.sim.World
-    estimator : {"infotaxis", "pmfs"}
+    estimator : {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}
     config : ExperimentConfig
     setting : world spec, optional, keyword-only
         The ontology, source region (the estimators' prior) and optional mapper beliefs of the world

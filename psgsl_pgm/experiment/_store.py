@@ -9,7 +9,7 @@ import numpy as np
 
 from ..io._npyfile import READ_ERRORS, load_npy
 from ..runs._runner import atomic_write
-from ._config import source_label
+from ._config import ESTIMATOR_NAMING, source_label, stored_estimator_name
 from ._run import RunResult
 
 __all__ = ["read_run_key", "load_run", "run_path", "save_run", "write_run"]
@@ -29,7 +29,7 @@ def write_run(result: RunResult, fh) -> None:
         source_xy=result.source_xy, time=result.time, position=result.position, hit=result.hit,
         error=result.error, spread=result.spread, snapshot_steps=steps, snapshots=snaps,
         region_hit=result.region_hit, region_area=result.region_area, hpd_level=result.hpd_level,
-        config=np.array(json.dumps(result.config, sort_keys=True)),
+        config=np.array(json.dumps(result.config, sort_keys=True)), estimator_naming=np.array(ESTIMATOR_NAMING),
     )
 
 
@@ -57,7 +57,8 @@ def load_run(path) -> RunResult:
         with load_npy(path, str(path)) as z:
             steps = z["snapshot_steps"]
             snaps = {int(s): z["snapshots"][i] for i, s in enumerate(steps)}
-            return RunResult(str(z["source"]), int(z["seed"]), str(z["estimator"]), z["source_xy"], z["time"],
+            estimator = stored_estimator_name(str(z["estimator"]), _naming(z))
+            return RunResult(str(z["source"]), int(z["seed"]), estimator, z["source_xy"], z["time"],
                              z["position"], z["hit"], z["error"], z["spread"], snaps, json.loads(str(z["config"])),
                              z["region_hit"], z["region_area"], z["hpd_level"])
     except (*READ_ERRORS, KeyError, TypeError) as exc:
@@ -65,16 +66,27 @@ def load_run(path) -> RunResult:
         raise ValueError(f"{path} is not a run file written by psgsl ({reason}); delete it to recompute the run") from None
 
 
+def _naming(z):
+    """The file's ``estimator_naming`` (None for a run stored before the field existed)."""
+    return int(z["estimator_naming"]) if "estimator_naming" in z.files else None
+
+
 def read_run_key(path, *, kind: str = "run") -> dict | None:
     """The run key (:mod:`psgsl_pgm.runs._key`) stored with a run (of the experiment or the closed loop), read
     without loading its arrays; None for a run stored without one. ValueError naming the file if it is not a
-    ``kind`` file written by psgsl."""
+    ``kind`` file written by psgsl, or if it is a run of the analytic-plume estimator stored under the name
+    ``pmfs`` (a grid would otherwise take it for a run of PMFS as published)."""
     path = Path(path)
     try:
         with load_npy(path, str(path)) as z:
             config = json.loads(str(z["config"]))
+            legacy = "estimator" in z.files and str(z["estimator"]) != stored_estimator_name(str(z["estimator"]),
+                                                                                              _naming(z))
     except (*READ_ERRORS, KeyError, TypeError) as exc:
         raise ValueError(f"{path} is not a {kind} file written by psgsl ({' '.join(str(exc).split())}); delete it "
                          "to recompute the run") from None
+    if legacy:
+        raise ValueError(f"{path} is a run of the analytic-plume estimator stored when it was named 'pmfs'; "
+                         "rename it with __analytic-plume__ in place of __pmfs__, or delete it to recompute the run")
     key = config.get("key") if isinstance(config, dict) else None
     return key if isinstance(key, dict) else None

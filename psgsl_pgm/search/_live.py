@@ -75,7 +75,7 @@ class LiveSession:
         World file of the house (:func:`psgsl_pgm.load_world`); default: the embedded house.
     seed : int, keyword-only
         Furniture layout of the embedded house (a world file's house is fixed).
-    estimator : {"infotaxis", "pmfs"}, keyword-only
+    estimator : {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}, keyword-only
     config : ExperimentConfig, optional, keyword-only
     policy : str, keyword-only
         One of :data:`psgsl_pgm.search.POLICIES` but ``tour``.

@@ -319,7 +319,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object"}
     variant : {"olfaction", "semantics", "semantics+rooms"}
         Which posterior the robot uses (the experiment's code path for it).
-    estimator : {"infotaxis", "pmfs"}
+    estimator : {"infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl"}
     config : ExperimentConfig, optional, keyword-only
         Physics and estimator settings (the validation experiment's).
     search : SearchConfig, optional, keyword-only

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..experiment._config import source_label
+from ..experiment._config import ESTIMATOR_NAMING, source_label, stored_estimator_name
+from ..experiment._store import _naming
 from ..experiment._store import read_run_key as _read_run_key
 from ..io._npyfile import READ_ERRORS, load_npy
 from ..runs._runner import atomic_write
@@ -33,7 +34,8 @@ def write_search_run(run: SearchRun, fh) -> None:
         fh, source=np.array(run.source), seed=np.array(run.seed), policy=np.array(run.policy),
         variant=np.array(run.variant), estimator=np.array(run.estimator), found=np.array(run.found),
         time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
-        config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS},
+        config=np.array(json.dumps(run.config, sort_keys=True)), estimator_naming=np.array(ESTIMATOR_NAMING),
+        **{k: getattr(run, k) for k in _ARRAYS},
         **{k: np.asarray(getattr(run, k)) for k in _DECLARATION})
 
 
@@ -55,7 +57,8 @@ def load_search_run(path) -> SearchRun:
                 arrays |= {k: bool(arrays[k]) for k in ("declared", "declared_correct")}
                 arrays |= {k: float(arrays[k]) for k in ("time_to_declare", "declared_error", "declared_mass")}
             return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
-                             str(z["estimator"]), arrays.pop("source_xy"), bool(z["found"]),
+                             stored_estimator_name(str(z["estimator"]), _naming(z)), arrays.pop("source_xy"),
+                             bool(z["found"]),
                              float(z["time_to_find"]), float(z["geodesic"]), float(z["driven"]),
                              config=json.loads(str(z["config"])), **arrays)
     except (*READ_ERRORS, KeyError, TypeError) as exc:

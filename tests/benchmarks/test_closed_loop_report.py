@@ -11,7 +11,7 @@ def _script():
     return load_script("closed_loop_report")
 
 
-def _run(runs, policy, seed, time, area, hit, *, found=True, estimator="pmfs", variant="olfaction"):
+def _run(runs, policy, seed, time, area, hit, *, found=True, estimator="analytic-plume", variant="olfaction"):
     np.savez(runs / f"oven__{policy}__{variant}__{estimator}__seed{seed}.npz", estimator=estimator, policy=policy,
              variant=variant, seed=seed, found=found, time_to_find=(time[-1] + 1.0) if found else 1000.0,
              time=np.asarray(time, float), region_area=np.asarray(area, float), region_hit=np.asarray(hit, bool))
@@ -28,14 +28,14 @@ def test_the_tour_is_read_at_its_last_stop_at_or_before_the_closed_loop_end(tmp_
     _run(runs, "infotaxis", 2, [0, 10], [60, 7], [1, 1])            # t = 10 exactly: the tour's stop at 10 s (40 m²)
     _run(runs, "infotaxis", 0, [0, 20], [60, 100], [1, 0], estimator="infotaxis")  # another estimator: ignored
     _run(runs, "infotaxis", 0, [0, 20], [60, 100], [1, 0], variant="semantics")    # no semantic tour: no pair
-    got = _script().matched_tour(runs, "pmfs")
+    got = _script().matched_tour(runs, "analytic-plume")
     assert list(got) == [("oven", "infotaxis/olfaction")]
     m = got[("oven", "infotaxis/olfaction")]
     assert m["n"] == 2
     assert m["time_median"] == pytest.approx(15.0)
     assert m["area"] == pytest.approx((3 + 7) / 2) and m["coverage"] == pytest.approx(1.0)
     assert m["tour_area"] == pytest.approx((30 + 40) / 2) and m["tour_coverage"] == pytest.approx(0.5)
-    assert _script().matched_tour(runs, "pmfs", min_pairs=3) == {}
+    assert _script().matched_tour(runs, "analytic-plume", min_pairs=3) == {}
 
 
 def test_a_run_not_found_pairs_with_a_tour_still_searching(tmp_path):
@@ -43,7 +43,7 @@ def test_a_run_not_found_pairs_with_a_tour_still_searching(tmp_path):
     runs.mkdir()
     _run(runs, "tour", 0, [0, 500, 990], [50, 20, 10], [0, 1, 1], found=False)
     _run(runs, "space-aware-infotaxis", 0, [0, 995], [60, 4], [1, 1], found=False)
-    m = _script().matched_tour(runs, "pmfs")[("oven", "space-aware-infotaxis/olfaction")]
+    m = _script().matched_tour(runs, "analytic-plume")[("oven", "space-aware-infotaxis/olfaction")]
     assert (m["n"], m["tour_area"], m["tour_coverage"]) == (1, 10.0, 1.0)
 
 

@@ -18,7 +18,7 @@ import pytest
 from psgsl_pgm.experiment import load_run
 
 STOPS = 24  # runs long enough to be in progress at a Ctrl-C, and still at a second one 0.3 s later
-GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "pmfs", "--stops", str(STOPS), "--quiet"]
+GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "analytic-plume", "--stops", str(STOPS), "--quiet"]
 TOTAL = 6
 
 

@@ -16,7 +16,7 @@ from psgsl_pgm.cli._main import main
 from psgsl_pgm.experiment import load_run
 
 STOPS = 24  # a run long enough that the other worker is still in one when the first is written
-GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "pmfs", "--quiet"]
+GRID = ["--sources", "oven", "--seeds", "3", "--estimators", "infotaxis", "analytic-plume", "--quiet"]
 
 
 def _experiment(out, *extra):

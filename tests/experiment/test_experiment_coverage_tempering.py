@@ -104,7 +104,7 @@ def _run(seed):
     return CalibrationRun(PlumeModel(occ, resolution=0.1, wind=wind), source, (cells[:, ::-1] + 0.5) * 0.1, hits)
 
 
-@pytest.mark.parametrize("estimator", ["infotaxis", "pmfs"])
+@pytest.mark.parametrize("estimator", ["infotaxis", "analytic-plume"])
 def test_coverage_thresholds_agree_with_the_estimators_own_tempered_update(estimator):
     """At β*(1 ∓ 1e-6) the estimator run *tempered* on the same readings holds / does not hold the source cell in
     its 90 % region (an independent path: the estimator's own update, not the recorded sum)."""

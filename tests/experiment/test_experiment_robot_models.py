@@ -79,7 +79,7 @@ def test_the_guard_catches_a_read_of_the_wind_field(guarded_world):
         guarded_world.wind.mean()
 
 
-@pytest.mark.parametrize("estimator", ["infotaxis", "pmfs"])
+@pytest.mark.parametrize("estimator", ["infotaxis", "analytic-plume"])
 def test_no_estimator_code_path_reads_the_simulated_wind(guarded_world, estimator):
     config = ExperimentConfig(stops=12)
     beliefs = VariantPosteriors(guarded_world, estimator, config)
@@ -108,7 +108,7 @@ def test_the_guard_catches_a_read_of_the_true_pose(pose_guarded_world):
             read(pose_guarded_world)
 
 
-@pytest.mark.parametrize("estimator", ["infotaxis", "pmfs"])
+@pytest.mark.parametrize("estimator", ["infotaxis", "analytic-plume"])
 def test_no_robot_code_path_reads_the_true_pose(pose_guarded_world, estimator):
     """The readings, frames and beliefs of a tour with a localisation error: the world applies the offset, the
     robot's code sees believed poses only."""
@@ -133,7 +133,7 @@ def test_no_robot_code_path_reads_the_detector_parameters():
     with pytest.raises(RuntimeError, match="read the simulator's detector parameters"):
         world.detector.confusion
     config = ExperimentConfig(stops=6)
-    beliefs = VariantPosteriors(world, "pmfs", config)
+    beliefs = VariantPosteriors(world, "analytic-plume", config)
     robot = beliefs.detector_model
     assert isinstance(robot, DetectorModel) and robot is robot_detector_model(HOUSE_CLASSES)
     assert robot.half_range is None and robot.persistence == 0 and robot.distractors == 0  # its own model
@@ -153,7 +153,7 @@ def test_wind_estimate_finds_the_through_flow_of_a_house():
     eddies: after a whole tour the coefficient of the unit-speed basis is the through-flow speed to ±15 %."""
     world = make_world(seed=5, source="oven", warm_up=10.0)
     config = ExperimentConfig()
-    beliefs = VariantPosteriors(world, "pmfs", config)
+    beliefs = VariantPosteriors(world, "analytic-plume", config)
     for _, stop, reading, wind, _ in walk(world, exploration_tour(world.house), config, camera=False):
         beliefs.wind.add(stop, wind)
     a = beliefs.wind.coefficients
@@ -200,11 +200,11 @@ def test_detector_estimate_converges_to_the_true_confusion_matrix():
 def test_frames_are_read_with_the_robot_detector_model():
     world = make_world(seed=4, source="oven", warm_up=5.0)
     config = ExperimentConfig(stops=3)
-    beliefs = VariantPosteriors(world, "pmfs", config)
+    beliefs = VariantPosteriors(world, "analytic-plume", config)
     robot = robot_detector_model()
     assert beliefs.detector_model is robot and robot is not world.detector
     assert not np.array_equal(robot.confusion, world.detector.confusion)
-    twin = VariantPosteriors(world, "pmfs", ExperimentConfig(stops=3, detector_model="simulator"))
+    twin = VariantPosteriors(world, "analytic-plume", ExperimentConfig(stops=3, detector_model="simulator"))
     assert twin.detector_model is None
     frame = world.camera_frame((2.0, 6.0, 0.0))
     beliefs.observe((2.0, 6.0), world.sense_gas((2.0, 6.0)), world.sense_wind((2.0, 6.0)), [frame])
@@ -224,10 +224,10 @@ def test_both_estimators_get_the_calibrated_inputs():
     cfg = ExperimentConfig(pmfs_tempering=0.37, tempering=0.29)
     model = PlumeModel(np.zeros((6, 8), bool), resolution=0.25, diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
                        encounter_scale=cfg.encounter_scale)
-    assert make_estimator("pmfs", model, cfg).tempering == 0.37
+    assert make_estimator("analytic-plume", model, cfg).tempering == 0.37
     assert make_estimator("infotaxis", model, cfg).tempering == 0.29
     world = make_world(seed=6, source="oven", warm_up=5.0)
-    for name in ("infotaxis", "pmfs"):
+    for name in ("infotaxis", "analytic-plume"):
         b = VariantPosteriors(world, name, cfg)
         assert (b.model.diffusivity, b.model.lifetime, b.model.encounter_scale) == (
             cfg.diffusivity, cfg.lifetime, cfg.encounter_scale)
@@ -247,7 +247,7 @@ def test_infotaxis_gets_the_parameter_grid_and_the_plume_solves_follow_the_wind(
     est = make_estimator("infotaxis", model, cfg)
     np.testing.assert_array_equal(est.parameter_grid, [[0.02, 100.0, 0.5, 0.25], [0.0131, 284.0, 0.821, 0.75]])
     assert est.n_components == 2 and est.plume_models[1] is model  # the config's own (D, τ) shares the model
-    assert not hasattr(make_estimator("pmfs", model, cfg), "parameter_grid")
+    assert not hasattr(make_estimator("analytic-plume", model, cfg), "parameter_grid")
     assert ExperimentConfig(parameter_grid=None).parameter_grid is None
     assert ExperimentConfig().parameter_grid is None and "parameter_grid" not in ExperimentConfig().to_dict()
     with_grid = ExperimentConfig(parameter_grid=PARAMETER_GRID)
@@ -336,7 +336,7 @@ def test_the_experiment_runs_with_mox_and_pid_sensors_from_make_world():
 
     for sensor in (MOXSensor(), PIDSensor()):
         world = make_world(seed=2, source="oven", warm_up=30.0, gas_sensor=sensor)
-        run = run_search("oven", 2, "pmfs", config=ExperimentConfig(stops=10), world=world)
+        run = run_search("oven", 2, "analytic-plume", config=ExperimentConfig(stops=10), world=world)
         assert run.hit.dtype == bool and run.n_steps == 10 and np.isfinite(run.error).all()
 
 

@@ -121,7 +121,7 @@ def test_run_equals_an_independent_pipeline_built_from_the_public_parts(short_ru
 def test_the_observation_stream_does_not_depend_on_the_estimator():
     tour = _short(exploration_tour(make_world(seed=2, warm_up=0.0).house), 25)
     a = run_search("oven", 2, "infotaxis", tour=tour)
-    b = run_search("oven", 2, "pmfs", tour=tour)
+    b = run_search("oven", 2, "analytic-plume", tour=tour)
     np.testing.assert_array_equal(a.hit, b.hit)
     np.testing.assert_array_equal(a.time, b.time)
     np.testing.assert_array_equal(a.position, b.position)

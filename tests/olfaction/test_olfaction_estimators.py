@@ -434,7 +434,7 @@ def test_bad_inputs_raise_with_clear_messages():
         HitProbabilityMap(GridMap(occ, 0.1), prior_hit=1.0)
 
 
-@pytest.mark.parametrize("kind", ["infotaxis", "pmfs"])
+@pytest.mark.parametrize("kind", ["infotaxis", "analytic-plume"])
 def test_condition_unread_then_a_reading_is_the_same_posterior_bit_for_bit(kind):
     """The closed loop's "not found" factor without reading the conditioned posterior back (``_condition``), then
     the next reading: the same posterior and log posterior, bit for bit, as :meth:`condition` (which normalises

@@ -15,13 +15,13 @@ from psgsl_pgm.ros import read_bag
 
 def test_experiment_record_writes_a_replayable_bag_beside_each_run(tmp_path):
     config = ExperimentConfig(stops=4, warm_up=5.0)
-    run_experiment(("oven",), (3,), ("pmfs",), out=tmp_path, workers=1, config=config, progress=False, record=True)
+    run_experiment(("oven",), (3,), ("analytic-plume",), out=tmp_path, workers=1, config=config, progress=False, record=True)
     runs = tmp_path / "runs"
-    assert sorted(p.name for p in runs.iterdir()) == ["oven__pmfs__seed3.bag", "oven__pmfs__seed3.mcap",
-                                                      "oven__pmfs__seed3.npz"]
-    stored = load_run(runs / "oven__pmfs__seed3.npz")
-    res = replay(runs / "oven__pmfs__seed3.bag")  # world, source, seed, estimator and config from the bag
-    assert res.run.estimator == "pmfs" and res.run.seed == 3
+    assert sorted(p.name for p in runs.iterdir()) == ["oven__analytic-plume__seed3.bag", "oven__analytic-plume__seed3.mcap",
+                                                      "oven__analytic-plume__seed3.npz"]
+    stored = load_run(runs / "oven__analytic-plume__seed3.npz")
+    res = replay(runs / "oven__analytic-plume__seed3.bag")  # world, source, seed, estimator and config from the bag
+    assert res.run.estimator == "analytic-plume" and res.run.seed == 3
     np.testing.assert_allclose(res.final, stored.snapshots[stored.n_steps], rtol=1e-12, atol=1e-300)
     np.testing.assert_allclose(res.run.error, stored.error, rtol=1e-12)
 

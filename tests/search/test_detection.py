@@ -108,7 +108,7 @@ def test_not_found_likelihood_and_p_f(probe, miss):
     np.testing.assert_allclose(model.found_probability(post, rows), expect, rtol=1e-12)
 
 
-@pytest.mark.parametrize("estimator", ["infotaxis", "pmfs"])
+@pytest.mark.parametrize("estimator", ["infotaxis", "analytic-plume"])
 @pytest.mark.parametrize("miss", [0.0, 0.25])
 def test_the_update_leaves_exactly_the_modelled_mass_in_every_variant(estimator, miss):
     """p(s | g) conditioned on "not found" along a path: the found hypotheses keep m p(R) / (m p(R) + 1 − p(R))

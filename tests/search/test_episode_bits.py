@@ -30,7 +30,7 @@ GOLDEN = {
         "6675f05bc6465ae0f62d8883ccc4a389c4c51bb0b29e59b6cea215e4017a0166",
     # PMFS: φ_G is the expected entropy drop under PMFS's own update (search._policies.olfactory_gain), so its
     # decisions, and this episode, differ from those of φ_G = I(S; hit)
-    ("bed", 2, "infotaxis", "olfaction", "pmfs", (("time_budget", 50.0), ("miss_probability", 0.3))):
+    ("bed", 2, "infotaxis", "olfaction", "analytic-plume", (("time_budget", 50.0), ("miss_probability", 0.3))):
         "599da88fd11876bb99464c9adf0351a6283c73493bf094ea4b486ac70478529a",
 }
 #: where GOLDEN was recorded: numpy, scipy, AVX-512 (numpy's SIMD exp and log), OpenBLAS kernels of numpy's build;

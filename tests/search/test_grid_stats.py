@@ -108,9 +108,9 @@ def test_only_the_declared_source_and_estimator_carry_the_primary_comparison():
     g, *_ = _groups("bed")
     assert not any(v["primary"] for v in _paired(g, source="bed", estimator="infotaxis").values())
     g, *_ = _groups()
-    assert not any(v["primary"] for v in _paired(g, source="oven", estimator="pmfs").values())
+    assert not any(v["primary"] for v in _paired(g, source="oven", estimator="analytic-plume").values())
     # with no primary comparison in the table, all three are Holm-adjusted together
-    out = _paired(g, source="oven", estimator="pmfs")
+    out = _paired(g, source="oven", estimator="analytic-plume")
     np.testing.assert_allclose([v["p_holm"] for v in out.values()], holm([v["p_value"] for v in out.values()]))
 
 

@@ -47,7 +47,7 @@ def test_branch_and_bound_is_the_exhaustive_arg_max_in_short_episodes_of_each_be
     episode of :func:`test_branch_and_bound_on_random_posteriors`, the longer episodes are the slow test below."""
     runs = [(("oven", 4, "space-aware-infotaxis", "olfaction"),
              {"search": SearchConfig(found_radius=1e-3, time_budget=12.0)}),
-            (("bed", 5, "space-aware-infotaxis", "semantics", "pmfs"),
+            (("bed", 5, "space-aware-infotaxis", "semantics", "analytic-plume"),
              {"search": SearchConfig(time_budget=12.0, miss_probability=0.3)})]
     _, sits = _along(monkeypatch, runs)
     assert {s.variant for s in sits} == {"olfaction", "semantics"}
@@ -60,7 +60,7 @@ def test_branch_and_bound_is_the_exhaustive_arg_max_along_episodes(monkeypatch):
              {"search": SearchConfig(found_radius=1e-3, time_budget=40.0)}),
             (("oven", 4, "space-aware-infotaxis", "olfaction"),
              {"search": SearchConfig(found_radius=1e-3, time_budget=40.0)}),
-            (("bed", 5, "space-aware-infotaxis", "semantics", "pmfs"),
+            (("bed", 5, "space-aware-infotaxis", "semantics", "analytic-plume"),
              {"search": SearchConfig(time_budget=40.0, miss_probability=0.3)})]
     shares, sits = _along(monkeypatch, runs)
     assert len(shares) >= 15
