@@ -20,7 +20,7 @@ VARIANTS = ("olfaction", "semantics", "semantics+rooms")
 #: advection-diffusion plume (:class:`psgsl_pgm.olfaction.PMFSEstimator`); ``pmfs`` is PMFS as published, with
 #: filament simulations on the GMRF wind estimate (:class:`psgsl_pgm.olfaction.FilamentPMFS`); ``grgsl`` is
 #: MAPIR's grid-based GSL (:class:`psgsl_pgm.olfaction.GrGSL`).
-ESTIMATORS = ("infotaxis", "analytic-plume", "particle-filter")
+ESTIMATORS = ("infotaxis", "analytic-plume", "particle-filter", "pmfs", "grgsl")
 
 #: Version of the estimator names written with every stored run (the ``estimator_naming`` field). Runs stored
 #: without the field were written when ``"pmfs"`` named the analytic-plume estimator.

@@ -24,7 +24,8 @@ from ..core._beliefs import room_evidence, update_class_probs
 from ..core._class_beliefs import ClassBeliefMap
 from ..core._fusion import fuse
 from ..core._semantic import semantic_source_probability
-from ..olfaction import GridInfotaxis, MeanWindEstimator, ParticleFilter, PlumeModel, PMFSEstimator
+from ..olfaction import (FilamentPMFS, GridInfotaxis, GrGSL, MeanWindEstimator, ParticleFilter, PlumeModel,
+                         PMFSEstimator)
 from ..sim import default_world, match_names, reindex
 from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._robot_models import robot_detector_model, robot_hit_rule, wind_basis
@@ -84,7 +85,7 @@ def semantic_terms(maps, likelihood, class_prior):
 
 def make_estimator(name, model, config, *, prior=None, seed: int = 0):
     """The olfactory estimator ``name`` of :data:`ESTIMATORS` on ``model`` with ``config``'s settings; ``seed``
-    seeds the estimators that draw random numbers (``particle-filter``), the run's seed where one is given."""
+    seeds the estimators that draw random numbers (``particle-filter``, ``pmfs``), the run's seed where one is given."""
     if name == "infotaxis":
         return GridInfotaxis.from_model(model, prior=prior, tempering=config.tempering,
                                         false_hit_rate=config.false_hit_rate, missed_hit_rate=config.missed_hit_rate,
@@ -94,6 +95,10 @@ def make_estimator(name, model, config, *, prior=None, seed: int = 0):
     if name == "particle-filter":
         return ParticleFilter.from_model(model, prior=prior, tempering=config.tempering,
                                          false_hit_rate=config.false_hit_rate, seed=seed)
+    if name == "pmfs":
+        return FilamentPMFS.from_model(model, prior=prior, seed=seed)
+    if name == "grgsl":
+        return GrGSL.from_model(model, prior=prior)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
 
 

@@ -9,6 +9,11 @@ factorisation; Green's functions for all candidate sources from one adjoint solv
   (Vergassola et al. 2007), tempered against correlated readings;
 * :class:`PMFSEstimator` — the PMFS family (the paper's baseline, Sec. "Validation"): a hit-probability map
   with confidence compared with the hit map each candidate source would produce;
+* :class:`FilamentPMFS` — PMFS as published (Ojeda et al. 2024): a GMRF wind map from the anemometer
+  (:class:`GMRFWind`), hit maps simulated with filaments on it from candidate regions, compared with the
+  measured hit map;
+* :class:`GrGSL` — MAPIR's grid-based GSL (Ojeda et al. 2021): upwind after a hit, towards the last hit after a
+  miss, propagated over the free space;
 * :class:`ParticleFilter` — sequential importance resampling over the source's position and release rate on the
   same likelihood as :class:`GridInfotaxis`, p(s | g) the particles' weight per cell.
 
@@ -43,6 +48,9 @@ from ._calibrate import (
     profile_log_likelihood,
     score_tempering,
 )
+from ._filament_pmfs import FilamentPMFS
+from ._gmrf_wind import GMRFWind
+from ._grgsl import GrGSL
 from ._hitmap import HitProbabilityMap
 from ._hits import HIT_RULE_KINDS, HitRule
 from ._infotaxis import GridInfotaxis
@@ -55,6 +63,9 @@ from ._wind_estimate import MeanWindEstimator
 __all__ = [
     "HIT_RULE_KINDS",
     "CalibrationRun",
+    "FilamentPMFS",
+    "GMRFWind",
+    "GrGSL",
     "GridInfotaxis",
     "HitProbabilityMap",
     "HitRule",
