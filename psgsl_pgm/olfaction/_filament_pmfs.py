@@ -39,7 +39,9 @@ class FilamentPMFS(OlfactoryEstimator):
        and σ / (1 + k‖w‖/σ)) and clamp to [0.001, 0.999]. ĥ_c = σ(ℓ_c). Confidence:
        ω_c += exp(−d_rc² / (2 σ_ω²)), d_rc the geodesic distance, conf_c = 1 − exp(−ω_c / m²).
     3. **Simulated hit maps and the update.** The free cells are split into square candidate regions of side
-       ``region_size`` (PMFS's quadtree leaves; no refinement here). From the free cell nearest each region's
+       ``region_size``; at each refresh every region with prior mass is simulated, and then, as PMFS refines its
+       quadtree, the best ``refine_fraction`` of them by the score below are split into four children of half
+       the side, which are simulated and replace their parent. From the free cell nearest each region's
        centre, filaments are released on û (``filaments_per_step`` per step of dt, moved by the local wind plus
        Gaussian noise of std sqrt(2 D dt) per axis — D the robot's calibrated diffusivity of its plume model —,
        a move into a wall skipped, outlets and the border removing; the project's compiled filament step,
@@ -56,14 +58,23 @@ class FilamentPMFS(OlfactoryEstimator):
     The simulations are refreshed on the current wind estimate at the first reading and then every
     ``refresh`` readings (PMFS's ``stepsSourceUpdate`` = 10); between refreshes a reading only updates the
     hit map and the score. Regions with zero prior mass are not simulated. Costs (the embedded house,
-    0.1 m cells, 2-core AMD EPYC): a refresh with the defaults ≈ 0.2-0.6 s for the ~300 regions of a uniform
-    prior (one compiled simulation per region, ~2000 filament-steps each), a reading between refreshes a few
-    milliseconds (one Dijkstra of the kernel's reach and a K × N' score, N' the confident cells).
+    0.1 m cells, 120 regions of 1 m, one core of a 2-core AMD EPYC): a refresh with the defaults ≈ 0.8 s
+    (about 5.5 ms per simulated region, 200 steps of up to 400 filaments, plus the refined children), a reading
+    between refreshes a few milliseconds (one Dijkstra of the kernel's reach and a K × N' score, N' the
+    confident cells). The cost of a refresh grows with filaments_per_step × (warmup_steps + record_steps)² per
+    region in a house without outlets (the filaments stay): PMFS's own 5 filaments per step and 150 + 200 steps
+    on 480 regions of 0.5 m take ≈ 22 s.
     ``hit_probability`` and ``information_gain`` predict a reading by the simulated hit maps, P(hit at x | s) =
     h_x(k(s)), once simulated (before that by the plume model).
 
-    Deviations from the published code, and why: a fixed region lattice instead of the quadtree refinement
-    (one pass, bounded cost in the closed loop); filaments released at one point per region instead of uniformly
+    A property of the published hit map worth knowing: the log-odds filter saturates (ĥ → 1 wherever several
+    hits overlap) and the kernel spreads a hit upwind as far as downwind, so with stops denser than the kernel's
+    reach close to the source, ĥ upwind of the source rises and sources upwind of the true one fit better (in a
+    corridor with stops 0.3 m apart the posterior sits one region upwind; 0.5 m apart it holds the source's
+    region, ``tests/olfaction/test_olfaction_field_methods.py``).
+
+    Deviations from the published code, and why: a lattice of square regions refined once instead of a
+    quadtree refined until its leaves are single cells (bounded cost in the closed loop); filaments released at one point per region instead of uniformly
     over it (the compiled step has one release point); the confidence's spatial weight unnormalised, in metres
     (PMFS's Gaussian density in cells).
 
@@ -75,15 +86,17 @@ class FilamentPMFS(OlfactoryEstimator):
         p(s); uniform over free cells by default.
     seed : int, default 0, keyword-only
         Seeds the simulations (refresh i draws from ``SeedSequence([seed, i])``).
-    region_size : float, default 0.5, keyword-only
-        Side of the candidate regions, m.
+    region_size : float, default 1.0, keyword-only
+        Side of the candidate regions, m (rounded to an even number of cells).
+    refine_fraction : float, default 0.1, keyword-only
+        Fraction of the regions (by score) split into four and simulated again at each refresh (0: none).
     hit_block : float, default 0.3, keyword-only
         Side of the blocks on which simulated filaments count as a hit, m (the sensor's reach).
     dt : float, default 0.2, keyword-only
         Simulation step, s (PMFS's ``deltaTime``).
-    warmup_steps, record_steps : int, default 150, 200, keyword-only
+    warmup_steps, record_steps : int, default 100, 100, keyword-only
         Steps before recording and recorded steps (PMFS: at most 500 warm-up, ``iterationsToRecord`` 200).
-    filaments_per_step : int, default 5, keyword-only
+    filaments_per_step : int, default 2, keyword-only
         Filaments released per step (PMFS: 5).
     diffusivity : float, optional, keyword-only
         D in m²/s for the filaments' noise; default the model's.
@@ -119,9 +132,9 @@ class FilamentPMFS(OlfactoryEstimator):
     (True, True)
     """
 
-    def __init__(self, model: PlumeModel, *, prior=None, seed: int = 0, region_size: float = 0.5,
-                 hit_block: float = 0.3, dt: float = 0.2, warmup_steps: int = 150, record_steps: int = 200,
-                 filaments_per_step: int = 5, diffusivity: float | None = None, refresh: int = 10,
+    def __init__(self, model: PlumeModel, *, prior=None, seed: int = 0, region_size: float = 1.0,
+                 refine_fraction: float = 0.1, hit_block: float = 0.3, dt: float = 0.2, warmup_steps: int = 100,
+                 record_steps: int = 100, filaments_per_step: int = 2, diffusivity: float | None = None, refresh: int = 10,
                  discrimination: float = 1.0, tempering: float = 1.0, prior_hit: float = 0.1,
                  hit_value: float = 0.6, miss_value: float = 0.05, kernel_sigma: float = 0.2,
                  kernel_stretch: float = 0.5, confidence_sigma: float = 0.5, confidence_weight: float = 0.5, wind: dict | None = None):
@@ -132,6 +145,7 @@ class FilamentPMFS(OlfactoryEstimator):
         self.seed = int(seed)
         res = model.geometry.resolution
         self.region_size = positive(region_size, "region_size", "m")
+        self.refine_fraction = unit_interval(refine_fraction, "refine_fraction")
         self.hit_block = positive(hit_block, "hit_block", "m")
         self.dt = positive(dt, "dt", "s")
         self.warmup_steps = index(warmup_steps, "warmup_steps")
@@ -152,25 +166,30 @@ class FilamentPMFS(OlfactoryEstimator):
         geo = model.geometry
         h, w = geo.shape
         rows, cols = np.indices((h, w))
-        rs = max(int(round(self.region_size / res)), 1)
-        hb = max(int(round(self.hit_block / res)), 1)
         free = geo.free.ravel()
-        region = ((rows // rs) * (-(-w // rs)) + cols // rs).ravel()
-        region = np.where(free, region, -1)
-        used, self._region_of = np.unique(region[free], return_inverse=True)
-        self._region = np.full(h * w, -1, np.int64)
-        self._region[free] = self._region_of  # dense region index of every free cell
-        self.n_regions = used.size
+        centres = geo.cell_centres().reshape(-1, 2)
+
+        def lattice(side_cells):
+            """(region of each free cell (dense), release cell of each region) of squares of ``side_cells``."""
+            lab = ((rows // side_cells) * (-(-w // side_cells)) + cols // side_cells).ravel()[free]
+            _, dense = np.unique(lab, return_inverse=True)
+            flat_free = np.flatnonzero(free)
+            release = np.empty(dense.max() + 1 if dense.size else 0, np.int64)
+            for k in range(release.size):
+                cells = flat_free[dense == k]
+                m = centres[cells].mean(axis=0)
+                release[k] = cells[np.argmin(((centres[cells] - m) ** 2).sum(axis=1))]
+            return dense, release
+
+        rs = 2 * max(int(round(self.region_size / res / 2)), 1)  # even: the children tile their parent
+        self._coarse, self._coarse_release = lattice(rs)  # PMFS's first level
+        self._fine, self._fine_release = lattice(max(rs // 2, 1))  # its children (each inside one coarse region)
+        self.n_regions = self._coarse_release.size
+        hb = max(int(round(self.hit_block / res)), 1)
         block = ((rows // hb) * (-(-w // hb)) + cols // hb).ravel()
         ub, binv = np.unique(block, return_inverse=True)
         self._block = binv.astype(np.int64)
         self._n_blocks = ub.size
-        centres = geo.cell_centres().reshape(-1, 2)
-        self._release = np.empty(self.n_regions, np.int64)  # flat release cell of each region
-        for k in range(self.n_regions):
-            cells = np.flatnonzero(self._region == k)
-            m = centres[cells].mean(axis=0)
-            self._release[k] = cells[np.argmin(((centres[cells] - m) ** 2).sum(axis=1))]
         self._graph = geo.free_space_graph()
         super().__init__(model, prior=prior)
 
@@ -196,12 +215,14 @@ class FilamentPMFS(OlfactoryEstimator):
         self._wind.reset()
         self._log_odds = np.zeros(n)  # ℓ_c − logit(p0)
         self._omega = np.zeros(n)
-        self._sim = None  # (K, n_blocks) simulated hit frequencies of the regions
+        self._sim = None  # (K', n_blocks) simulated hit frequencies of the regions of the last refresh
+        self._assign = None  # (n_free,) row of _sim of each free cell's region
         self._n_refresh = 0
         self.n_simulations = 0
 
-    def _simulate(self, wind_field: np.ndarray, refresh_index: int) -> np.ndarray:
-        """(K, n_blocks) hit frequencies of every region with prior mass, on ``wind_field`` (H, W, 2)."""
+    def _simulate(self, wind_field: np.ndarray, release: np.ndarray, rng) -> np.ndarray:
+        """(len(release), n_blocks) hit frequencies of filaments released at the flat cells ``release`` on
+        ``wind_field`` (H, W, 2)."""
         from ..kernels._pmfs_sim import record_hits
 
         geo = self.geometry
@@ -210,15 +231,11 @@ class FilamentPMFS(OlfactoryEstimator):
         vel = np.ascontiguousarray(wind_field.reshape(-1, 2))
         walls = np.ascontiguousarray(geo.occupancy.ravel())
         stays = np.pad(~self.model.outlets, 1).ravel()
-        centres = geo.cell_centres().reshape(-1, 2)
-        rng = np.random.default_rng(np.random.SeedSequence([self.seed, refresh_index]))
+        centres = self._centres
         cap = self.filaments_per_step * (self.warmup_steps + self.record_steps) + 2
         noise = float(np.sqrt(2.0 * self.diffusivity * self.dt))
-        has_mass = np.zeros(self.n_regions, bool)
-        np.logical_or.at(has_mass, self._region_of, np.isfinite(self._log_prior[self.geometry.free.ravel()]))
-        sim = np.zeros((self.n_regions, self._n_blocks))
-        for k in np.flatnonzero(has_mass):
-            cell = int(self._release[k])
+        sim = np.zeros((len(release), self._n_blocks))
+        for k, cell in enumerate(np.asarray(release, np.int64).tolist()):
             pos, births, cells = np.empty((cap, 2)), np.empty(cap), np.empty((cap, 2), np.int64)
             counts = record_hits(rng, self.warmup_steps, self.record_steps, pos, births, cells, vel, self.dt,
                                  self.filaments_per_step / self.dt, noise, float(centres[cell, 0]),
@@ -227,6 +244,28 @@ class FilamentPMFS(OlfactoryEstimator):
             sim[k] = counts / self.record_steps
             self.n_simulations += 1
         return sim
+
+    def _refresh(self, wind_field: np.ndarray, log_odds: np.ndarray, omega: np.ndarray):
+        """PMFS's two-level simulation: every coarse region with prior mass, then the children of the best
+        ``refine_fraction`` of them by score. Returns ``(sim (K', n_blocks), region of each free cell (n_free,))``."""
+        rng = np.random.default_rng(np.random.SeedSequence([self.seed, self._n_refresh]))
+        mass = np.isfinite(self._log_prior[self.geometry.free.ravel()])
+        coarse = np.unique(self._coarse[mass])  # coarse regions with prior mass
+        sim = np.zeros((self.n_regions, self._n_blocks))
+        sim[coarse] = self._simulate(wind_field, self._coarse_release[coarse], rng)
+        assign = self._coarse.copy()
+        n_refine = int(np.ceil(self.refine_fraction * coarse.size))
+        if n_refine:
+            score = self._score(sim[coarse], assign, log_odds, omega)
+            best = coarse[np.argsort(-score, kind="stable")[:n_refine]]
+            cells = np.isin(self._coarse, best) & mass
+            children = np.unique(self._fine[cells])
+            sim_child = self._simulate(wind_field, self._fine_release[children], rng)
+            slot = np.full(self._fine_release.size, -1, np.int64)
+            slot[children] = self.n_regions + np.arange(children.size)
+            assign[cells] = slot[self._fine[cells]]
+            sim = np.concatenate([sim, sim_child])
+        return sim, assign
 
     def _measurement(self, obs: Observation):
         """(ℓ − logit p0, ω) after ``obs`` (copies)."""
@@ -243,8 +282,9 @@ class FilamentPMFS(OlfactoryEstimator):
         omega[near] += np.exp(-0.5 * (dist[near] / self.confidence_sigma) ** 2)
         return log_odds, omega
 
-    def _score(self, sim: np.ndarray, log_odds: np.ndarray, omega: np.ndarray) -> np.ndarray:
-        """(K,) Σ_c log[1 − conf_c γ abs(ĥ_c − h_c(k))] over the cells with positive confidence."""
+    def _score(self, sim: np.ndarray, assign, log_odds: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        """(K,) Σ_c log[1 − conf_c γ abs(ĥ_c − h_c(k))] over the cells with positive confidence, for the rows
+        of ``sim`` ((K, n_blocks) hit frequencies); ``assign`` is unused (the rows are the candidates)."""
         conf = -np.expm1(-omega / self.confidence_weight ** 2)
         cells = np.flatnonzero((conf > 0) & self.geometry.free.ravel())
         h_obs = 1.0 / (1.0 + np.exp(-(log_odds[cells] + _logit(self.prior_hit))))
@@ -253,7 +293,6 @@ class FilamentPMFS(OlfactoryEstimator):
 
     def _propose(self, obs: Observation):
         wind = self._wind
-        field = None
         if obs.wind is not None:  # the wind map takes the reading first
             wind = GMRFWind.__new__(GMRFWind)
             wind.__dict__.update(self._wind.__dict__)
@@ -261,19 +300,17 @@ class FilamentPMFS(OlfactoryEstimator):
             wind.add(obs.position, obs.wind)
         log_odds, omega = self._measurement(obs)
         n = len(self._observations) + 1
-        sim, n_refresh = self._sim, self._n_refresh
+        sim, assign, n_refresh = self._sim, self._assign, self._n_refresh
         if sim is None or (n - 1) % self.refresh == 0:
-            field = wind.field()
-            sim = self._simulate(field, self._n_refresh)
+            sim, assign = self._refresh(wind.field(), log_odds, omega)
             n_refresh += 1
-        score = self._score(sim, log_odds, omega)
+        score = self._score(sim, assign, log_odds, omega)
         log_post = self._log_prior.copy()
-        free = self.geometry.free.ravel()
-        log_post[free] += self.tempering * score[self._region_of]
-        return log_post, (wind, log_odds, omega, sim, n_refresh)
+        log_post[self.geometry.free.ravel()] += self.tempering * score[assign]
+        return log_post, (wind, log_odds, omega, sim, assign, n_refresh)
 
     def _accept(self, obs: Observation, payload) -> None:
-        self._wind, self._log_odds, self._omega, self._sim, self._n_refresh = payload
+        self._wind, self._log_odds, self._omega, self._sim, self._assign, self._n_refresh = payload
 
     # --- read-out -------------------------------------------------------------------------------------------
     def _hit_likelihood_rows(self, flat_cells: np.ndarray) -> np.ndarray:
@@ -284,7 +321,7 @@ class FilamentPMFS(OlfactoryEstimator):
         out = np.zeros((len(flat_cells), n))
         free = self.geometry.free.ravel()
         blocks = self._block[np.asarray(flat_cells, np.int64)]
-        out[:, free] = self._sim[:, blocks].T[:, self._region_of]
+        out[:, free] = self._sim[:, blocks].T[:, self._assign]
         return out
 
     @property
@@ -306,7 +343,7 @@ class FilamentPMFS(OlfactoryEstimator):
         """(H, W) the simulated hit frequency h_c(k) of the region k holding ``position`` (x, y) m (the last
         refresh; zeros before the first)."""
         r, c = self.model.cell_of(position)
-        k = self._region[r * self.geometry.shape[1] + c]
-        if self._sim is None or k < 0:
+        if self._sim is None:
             return np.zeros(self.geometry.shape)
+        k = self._assign[np.searchsorted(np.flatnonzero(self.geometry.free.ravel()), r * self.geometry.shape[1] + c)]
         return self._sim[k][self._block].reshape(self.geometry.shape)
