@@ -5,7 +5,7 @@ For house-like grids (rooms separated by walls with doors, an outlet, a uniform 
 * ``factor``: operator assembly + sparse LU (``PlumeModel`` construction);
 * ``solve``: one adjoint solve ``splu(A).solve(e_x, trans="T")`` — the baseline;
 * Infotaxis update at a new sensor cell (one solve + likelihood + normalisation) and at a cached one;
-* PMFS update at a new cell after 50 earlier stops (hit-map kernel, Dijkstra, score over K = 51 cells);
+* analytic-plume (PMFS-family) update at a new cell after 50 earlier stops (hit-map kernel, Dijkstra, score over K = 51 cells);
 * information gain for 20 candidate positions (cached).
 
 Run: ``python benchmarks/bench_olfaction.py [--sizes 50x60 100x120 200x240] [--repeats 5]``. Best of several

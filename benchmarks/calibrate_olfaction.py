@@ -45,8 +45,8 @@ def main(argv=None):
     print(f"D = {fit.diffusivity:.4g} m²/s, τ = {fit.lifetime:.4g} s, κ = {fit.encounter_scale:.4g} m²/s, "
           f"log L = {fit.log_likelihood:.2f}")
     print(f"residual lag-1 autocorrelation ρ = {cal.rho:.4f} -> tempering β = (1 − ρ)/(1 + ρ) = {cal.tempering:.4f}")
-    print(f"PMFS score exponent λ (log score of the known sources) = {cal.pmfs_tempering:.4f}")
-    for name, cov in (("Infotaxis β", cal.coverage), ("PMFS λ", cal.pmfs_coverage)):
+    print(f"analytic-plume score exponent λ (log score of the known sources) = {cal.pmfs_tempering:.4f}")
+    for name, cov in (("Infotaxis β", cal.coverage), ("analytic-plume λ", cal.pmfs_coverage)):
         b = cov.thresholds.reshape(-1, 4)
         print(f"{name} for coverage 0.90 of the 90 % region on GRID_CALIBRATION_RUNS = {cov.tempering:.4f} (bootstrap over runs "
               f"5–95 %: {cov.interval[0]:.3f}–{cov.interval[1]:.3f}); coverage at ¼ ½ ¾ end "

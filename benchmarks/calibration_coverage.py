@@ -7,7 +7,7 @@ every recorded calibration posterior (:func:`psgsl_pgm.experiment.coverage_thres
 gives the 90 % region a coverage of 0.90 (:func:`psgsl_pgm.experiment.coverage_tempering`, run bootstrap).
 ``--evaluate``: per estimator, source and variant, the coverage of the 90 % region at ¼, ½, ¾ and the end, its
 mean area at the end (m²) and the median HPD level of the source cell, at the ``--before`` tempering (Infotaxis,
-PMFS) and at the fitted one (or ``--after``) — exact arithmetic on the records
+analytic-plume) and at the fitted one (or ``--after``) — exact arithmetic on the records
 (:func:`psgsl_pgm.experiment.tempered_posterior`, then :func:`psgsl_pgm.core.fuse` with p(s | z) as the experiment
 does).
 """
@@ -73,9 +73,9 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--fit", nargs="*", default=[])
     ap.add_argument("--evaluate", nargs="*", default=[])
-    ap.add_argument("--before", default="0.298,0.380", help="Infotaxis β, PMFS λ before")
+    ap.add_argument("--before", default="0.298,0.380", help="Infotaxis β, analytic-plume λ before")
     ap.add_argument("--sweep", default=None, help="comma-separated temperings: final coverage and area at each")
-    ap.add_argument("--after", default=None, help="Infotaxis β, PMFS λ after (default: the fitted ones)")
+    ap.add_argument("--after", default=None, help="Infotaxis β, analytic-plume λ after (default: the fitted ones)")
     a = ap.parse_args()
     before = dict(zip(("infotaxis", "analytic-plume"), map(float, a.before.split(","))))
     after = dict(zip(("infotaxis", "analytic-plume"), map(float, a.after.split(",")))) if a.after else {}

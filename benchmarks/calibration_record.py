@@ -10,11 +10,11 @@ that fit) and stores, at ¼, ½, ¾ of the run's
 time and at its end (:func:`psgsl_pgm.experiment._metrics.at_fractions`, as ``psgsl experiment`` does):
 
 * Infotaxis: the *untempered* accumulated log-likelihood Σ_k log P_θj(g_k | s) of every grid component j, (J, H·W);
-* PMFS: the untempered score S(s), (1, H·W);
+* analytic-plume: the untempered score S(s), (1, H·W);
 * the estimator's log prior, p(s | z) of both semantic variants (held-out runs), the true cell.
 
 A tempered posterior p(s | g) ∝ p(s) Σ_j π_j exp(β L_j(s)) (Infotaxis, any β and weights; one component: the
-single fit) or p(s) exp(λ S(s)) (PMFS) is then exact arithmetic on the record
+single fit) or p(s) exp(λ S(s)) (analytic-plume) is then exact arithmetic on the record
 (:func:`psgsl_pgm.experiment.recorded_posterior`), and the stored posterior of the default configuration is
 checked against it. ``--calibration`` runs :data:`psgsl_pgm.experiment.GRID_CALIBRATION_RUNS` (olfaction only,
 no camera, as :func:`psgsl_pgm.experiment.calibration_runs`).

@@ -10,7 +10,7 @@ field — :func:`calibrate` fits
 * the tempering β of :class:`psgsl_pgm.olfaction.GridInfotaxis` from the lag-1 autocorrelation of the hit
   model's Pearson residuals along each run at the fitted parameters (:func:`psgsl_pgm.olfaction.ar1_tempering`:
   β = n_eff / n = (1 − ρ̂)/(1 + ρ̂));
-* the exponent λ of the PMFS score (:class:`psgsl_pgm.olfaction.PMFSEstimator`, a pseudo-likelihood without
+* the exponent λ of the analytic-plume estimator's PMFS-family score (:class:`psgsl_pgm.olfaction.PMFSEstimator`, a pseudo-likelihood without
   a reading-level model whose residuals could be used), by the log score of the known sources
   (:func:`pmfs_tempering`);
 * the population weights of the plume-parameter grid that :class:`psgsl_pgm.olfaction.GridInfotaxis`
@@ -84,10 +84,10 @@ GRID_AXES = {"diffusivity": (0.004, 0.0131, 0.04), "lifetime": (284.0,), "encoun
 @dataclass(frozen=True)
 class Calibration:
     """The fitted hit model: ``plume`` (D, τ, κ, log-likelihood), the residuals' pooled lag-1 autocorrelation
-    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the PMFS score exponent ``pmfs_tempering``, the
+    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the analytic-plume score exponent ``pmfs_tempering``, the
     number of readings ``n``, ``parameter_grid``, the rows (D, τ, κ, weight) of the grid Infotaxis
     marginalises over (None when not fitted), and ``coverage`` / ``pmfs_coverage``, the
-    :class:`CoverageTempering` of Infotaxis (single fit) and PMFS on the calibration runs (None when not fitted)."""
+    :class:`CoverageTempering` of Infotaxis (single fit) and the analytic-plume estimator on the calibration runs (None when not fitted)."""
 
     plume: PlumeFit
     rho: float
@@ -246,7 +246,8 @@ def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig
 
 
 def pmfs_tempering(data, fit: PlumeFit) -> float:
-    """The PMFS score exponent λ (:class:`psgsl_pgm.olfaction.PMFSEstimator` ``tempering``) that maximises the
+    """The analytic-plume score exponent λ (:class:`psgsl_pgm.olfaction.PMFSEstimator` ``tempering``, estimator
+    ``analytic-plume``) that maximises the
     log posterior of the known source at ¼, ½, ¾ and the end of every calibration run
     (:func:`psgsl_pgm.olfaction.score_tempering`); the plume with the fitted (D, τ, κ) and each run's estimated
     wind, a uniform prior over the free cells."""
@@ -271,7 +272,7 @@ def tempered_posterior(log_prior, log_likelihoods, tempering: float, *, weights=
 
     The posterior of :class:`psgsl_pgm.olfaction.GridInfotaxis` (L_j = Σ_k log P_θj(g_k | s), one row per
     component of its ``parameter_grid``, one row without) and of :class:`psgsl_pgm.olfaction.PMFSEstimator`
-    (one row, L = the PMFS score S(s), β = λ) at any tempering.
+    (one row, L = the analytic-plume score S(s), β = λ) at any tempering.
 
     Parameters
     ----------

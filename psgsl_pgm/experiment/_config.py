@@ -78,7 +78,8 @@ class ExperimentConfig:
         per-step code, ``benchmarks/calibration_coverage.py``) β = 0.261, its bootstrap interval 0.16–0.49
         holding this value, which is therefore kept.
     pmfs_tempering : float
-        λ, the exponent of the score of :class:`psgsl_pgm.olfaction.PMFSEstimator`, fitted by the log score of the
+        λ, the exponent of the score of :class:`psgsl_pgm.olfaction.PMFSEstimator` (estimator ``analytic-plume``;
+        the field keeps its stored name), fitted by the log score of the
         known sources on the same calibration runs (:func:`pmfs_tempering`: 0.3801); for coverage of the 90 %
         region λ = 0.314, bootstrap interval 0.28–0.70 holding this value.
     false_hit_rate : float

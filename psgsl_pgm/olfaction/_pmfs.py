@@ -1,4 +1,4 @@
-"""PMFS-style source posterior: the observed hit map against the hit map each candidate source would produce."""
+"""The analytic-plume estimator, a PMFS-style source posterior: the observed hit map against the hit map each candidate source would produce."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ _HITMAP_KEYS = ("prior_hit", "prior_strength", "kernel_sigma", "kernel_stretch",
 
 
 class PMFSEstimator(OlfactoryEstimator):
-    """Source posterior of the PMFS family (Ojeda, Monroy & Gonzalez-Jimenez), the paper's baseline.
+    """Source posterior of the PMFS family (Ojeda, Monroy & Gonzalez-Jimenez) on an analytic plume: estimator
+    ``analytic-plume``. PMFS as published, with filament simulations, is :class:`FilamentPMFS` (``pmfs``).
 
     PMFS keeps a map of hit probabilities with a confidence (:class:`HitProbabilityMap`) and scores every
     candidate source s by how well the hit map it would produce, h_c(s), agrees with the estimate ĥ_c, each

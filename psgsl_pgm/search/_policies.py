@@ -46,10 +46,10 @@ moves (:meth:`FreeSpace.candidates`).
   G(p) = P_f(p) H(S) + (1 − P_f(p)) [φ_G(p) + φ_O(p)], φ_G = I(S; hit at p) under the variant's posterior and
   φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
   Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
-  With the PMFS estimator, whose posterior is recomputed from a hit map rather than updated by Bayes' rule, φ_G
+  With the analytic-plume estimator (PMFS's score), whose posterior is recomputed from a hit map rather than updated by Bayes' rule, φ_G
   is the expected entropy drop under that estimator's own update (:func:`olfactory_gain`). Decided by exact
   branch and bound (:func:`_choose_infotaxis`, :func:`_branch_and_bound`): upper bounds of φ_G and φ_O, then the
-  exact score of the poses whose bound reaches the best one (every pose under PMFS's own update).
+  exact score of the poses whose bound reaches the best one (every pose under its own update).
 * ``space-aware-infotaxis`` — Loisy & Eloy (2022): the value V = log₂(D + 2^{H−1} − ½), with D the expected
   distance to the source and H the entropy in bits, estimates log₂ of the remaining search. On their lattice the
   source is found on its own cell, so a belief that has not found it has D ≥ 1 move, V ≥ 0, and V = 0 (the
