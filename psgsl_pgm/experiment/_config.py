@@ -82,6 +82,10 @@ class ExperimentConfig:
         the field keeps its stored name), fitted by the log score of the
         known sources on the same calibration runs (:func:`pmfs_tempering`: 0.3801); for coverage of the 90 %
         region λ = 0.314, bootstrap interval 0.28–0.70 holding this value.
+    filament_pmfs_tempering : float
+        λ of :class:`psgsl_pgm.olfaction.FilamentPMFS` (estimator ``pmfs``), fitted the same way on the same runs
+        (``benchmarks/calibrate_pmfs.py``: 0.0152; the mean log posterior of the true cell −8.07 against −74.7 at
+        λ = 1, PMFS itself, and −8.85 for a uniform posterior over the house's free cells).
     false_hit_rate : float
         ε of :class:`psgsl_pgm.olfaction.GridInfotaxis` (held fixed in the fit).
     missed_hit_rate : float
@@ -127,6 +131,7 @@ class ExperimentConfig:
     encounter_scale: float = 0.821
     tempering: float = 0.298
     pmfs_tempering: float = 0.380
+    filament_pmfs_tempering: float = field(default=0.0152, metadata={OMIT_DEFAULT: True})
     false_hit_rate: float = 0.01
     missed_hit_rate: float = field(default=0.0, metadata={OMIT_DEFAULT: True})
     parameter_grid: tuple | None = None

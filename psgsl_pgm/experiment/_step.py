@@ -96,7 +96,7 @@ def make_estimator(name, model, config, *, prior=None, seed: int = 0):
         return ParticleFilter.from_model(model, prior=prior, tempering=config.tempering,
                                          false_hit_rate=config.false_hit_rate, seed=seed)
     if name == "pmfs":
-        return FilamentPMFS.from_model(model, prior=prior, seed=seed)
+        return FilamentPMFS.from_model(model, prior=prior, seed=seed, tempering=config.filament_pmfs_tempering)
     if name == "grgsl":
         return GrGSL.from_model(model, prior=prior)
     raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")

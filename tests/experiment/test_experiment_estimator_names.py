@@ -21,6 +21,9 @@ def test_each_name_makes_its_estimator():
     assert type(make_estimator("analytic-plume", model, cfg)) is PMFSEstimator
     est = make_estimator("pmfs", model, cfg, seed=7)
     assert type(est) is FilamentPMFS and est.seed == 7 and est.diffusivity == model.diffusivity
+    assert est.tempering == cfg.filament_pmfs_tempering
+    assert "filament_pmfs_tempering" not in cfg.to_dict()  # a default that leaves stored run keys as they were
+    assert ExperimentConfig(filament_pmfs_tempering=0.5).to_dict()["filament_pmfs_tempering"] == 0.5
     assert type(make_estimator("grgsl", model, cfg)) is GrGSL
     with pytest.raises(ValueError, match="analytic-plume"):
         make_estimator("pmfs-style", model, cfg)
