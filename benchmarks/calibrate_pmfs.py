@@ -45,7 +45,8 @@ def main(argv=None):
                 scores.append(score)
                 priors.append(lp)
                 truth.append(r * model.shape[1] + c)
-        print(f"run {k}: {run.source} error of E[s] {np.hypot(*(np.array(est.expected_position()) - run.source)):.2f} m "
+        err = np.hypot(*(np.array(est.expected_position()) - run.source))
+        print(f"run {k}: {run.source} error of E[s] {err:.2f} m "
               f"({time.perf_counter() - t0:.0f} s)")
     lam = score_tempering(scores, priors, truth)
     print(f"PMFS score exponent λ (log score of the known sources) = {lam:.4f}")

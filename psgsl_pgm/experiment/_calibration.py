@@ -10,7 +10,8 @@ field — :func:`calibrate` fits
 * the tempering β of :class:`psgsl_pgm.olfaction.GridInfotaxis` from the lag-1 autocorrelation of the hit
   model's Pearson residuals along each run at the fitted parameters (:func:`psgsl_pgm.olfaction.ar1_tempering`:
   β = n_eff / n = (1 − ρ̂)/(1 + ρ̂));
-* the exponent λ of the analytic-plume estimator's PMFS-family score (:class:`psgsl_pgm.olfaction.PMFSEstimator`, a pseudo-likelihood without
+* the exponent λ of the analytic-plume estimator's PMFS-family score (:class:`psgsl_pgm.olfaction.PMFSEstimator`,
+  a pseudo-likelihood without
   a reading-level model whose residuals could be used), by the log score of the known sources
   (:func:`pmfs_tempering`);
 * the population weights of the plume-parameter grid that :class:`psgsl_pgm.olfaction.GridInfotaxis`
@@ -84,10 +85,12 @@ GRID_AXES = {"diffusivity": (0.004, 0.0131, 0.04), "lifetime": (284.0,), "encoun
 @dataclass(frozen=True)
 class Calibration:
     """The fitted hit model: ``plume`` (D, τ, κ, log-likelihood), the residuals' pooled lag-1 autocorrelation
-    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the analytic-plume score exponent ``pmfs_tempering``, the
+    ``rho`` and the tempering ``tempering`` = (1 − ρ)/(1 + ρ), the analytic-plume score exponent
+    ``pmfs_tempering``, the
     number of readings ``n``, ``parameter_grid``, the rows (D, τ, κ, weight) of the grid Infotaxis
     marginalises over (None when not fitted), and ``coverage`` / ``pmfs_coverage``, the
-    :class:`CoverageTempering` of Infotaxis (single fit) and the analytic-plume estimator on the calibration runs (None when not fitted)."""
+    :class:`CoverageTempering` of Infotaxis (single fit) and the analytic-plume estimator on the calibration runs
+    (None when not fitted)."""
 
     plume: PlumeFit
     rho: float

@@ -48,7 +48,9 @@ class FilamentPMFS(OlfactoryEstimator):
        :mod:`psgsl_pgm.kernels._filaments`). After ``warmup_steps`` steps, ``record_steps`` more are recorded:
        h_c(k) is the fraction of them in which the block of side ``hit_block`` holding c held a filament. Then
 
-           p(s | g) ∝ p(s) · Π_c [1 − conf_c + conf_c (1 − γ abs(ĥ_c − h_c(k(s))))]^λ        (PMFS ``weightedDifference``)
+           p(s | g) ∝ p(s) · Π_c [1 − conf_c + conf_c (1 − γ abs(ĥ_c − h_c(k(s))))]^λ
+
+       (PMFS's ``weightedDifference``)
 
        with k(s) the region of s, γ = ``discrimination`` (PMFS's ``sourceDiscriminationPower``, 1) and λ =
        ``tempering`` (1: PMFS itself). The product runs over the cells with positive confidence. Every factor is
@@ -74,7 +76,8 @@ class FilamentPMFS(OlfactoryEstimator):
     region, ``tests/olfaction/test_olfaction_field_methods.py``).
 
     Deviations from the published code, and why: a lattice of square regions refined once instead of a
-    quadtree refined until its leaves are single cells (bounded cost in the closed loop); filaments released at one point per region instead of uniformly
+    quadtree refined until its leaves are single cells (bounded cost in the closed loop); filaments released at
+    one point per region instead of uniformly
     over it (the compiled step has one release point); the confidence's spatial weight unnormalised, in metres
     (PMFS's Gaussian density in cells).
 
@@ -137,10 +140,12 @@ class FilamentPMFS(OlfactoryEstimator):
 
     def __init__(self, model: PlumeModel, *, prior=None, seed: int = 0, region_size: float = 1.0,
                  refine_fraction: float = 0.1, hit_block: float = 0.3, dt: float = 0.2, warmup_steps: int = 100,
-                 record_steps: int = 100, filaments_per_step: int = 2, diffusivity: float | None = None, refresh: int = 10,
+                 record_steps: int = 100, filaments_per_step: int = 2, diffusivity: float | None = None,
+                 refresh: int = 10,
                  discrimination: float = 1.0, tempering: float = 1.0, prior_hit: float = 0.1,
                  hit_value: float = 0.6, miss_value: float = 0.05, kernel_sigma: float = 0.2,
-                 kernel_stretch: float = 0.5, confidence_sigma: float = 0.15, confidence_weight: float = 0.5, wind: dict | None = None):
+                 kernel_stretch: float = 0.5, confidence_sigma: float = 0.15, confidence_weight: float = 0.5,
+                 wind: dict | None = None):
         if not isinstance(model, PlumeModel):
             raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
@@ -203,7 +208,8 @@ class FilamentPMFS(OlfactoryEstimator):
 
     def replace_model(self, model: PlumeModel) -> np.ndarray:
         """Take a plume model of the same map (e.g. one solved on a refreshed mean-wind estimate) without
-        re-assimilating the readings: this estimator's update does not use the model's wind (it keeps its own GMRF wind map; its diffusivity was fixed at construction)."""
+        re-assimilating the readings: this estimator's update does not use the model's wind (it keeps its own GMRF
+        wind map; its diffusivity was fixed at construction)."""
         if not isinstance(model, PlumeModel):
             raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
         if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,

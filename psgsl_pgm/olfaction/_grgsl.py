@@ -83,7 +83,8 @@ class GrGSL(OlfactoryEstimator):
 
     def replace_model(self, model: PlumeModel) -> np.ndarray:
         """Take a plume model of the same map (e.g. one solved on a refreshed mean-wind estimate) without
-        re-assimilating the readings: this estimator's update does not use the model's wind (it reads the anemometer only)."""
+        re-assimilating the readings: this estimator's update does not use the model's wind (it reads the
+        anemometer only)."""
         if not isinstance(model, PlumeModel):
             raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
         if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
