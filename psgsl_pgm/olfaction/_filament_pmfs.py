@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse.csgraph import dijkstra
+from scipy.special import expit
 
 from .._shared._validate import index, positive, unit_interval
 from ._base import Observation, OlfactoryEstimator
@@ -293,12 +294,26 @@ class FilamentPMFS(OlfactoryEstimator):
 
     def _score(self, sim: np.ndarray, assign, log_odds: np.ndarray, omega: np.ndarray) -> np.ndarray:
         """(K,) Σ_c log[1 − conf_c γ abs(ĥ_c − h_c(k))] over the cells with positive confidence, for the rows
-        of ``sim`` ((K, n_blocks) hit frequencies); ``assign`` is unused (the rows are the candidates)."""
-        conf = -np.expm1(-omega / self.confidence_weight ** 2)
-        cells = np.flatnonzero((conf > 0) & self.geometry.free.ravel())
-        h_obs = 1.0 / (1.0 + np.exp(-(log_odds[cells] + _logit(self.prior_hit))))
-        diff = np.abs(h_obs[None, :] - sim[:, self._block[cells]])
-        return np.log1p(-self.discrimination * conf[cells][None, :] * diff).sum(axis=1)
+        of ``sim`` ((K, n_blocks) hit frequencies); ``assign`` is unused (the rows are the candidates).
+
+        Evaluated in log space as log[(1 − conf) + conf ((1 − γ) + γ (1 − abs(ĥ − h)))], with
+        log(1 − conf) = −ω/m², log ĥ = −log(1 + e^{−ℓ}), log(1 − ĥ) = −log(1 + e^{ℓ}) and
+        1 − abs(ĥ − h) = (1 − ĥ) + h where ĥ ≥ h, (1 − h) + ĥ elsewhere: every factor stays positive and finite
+        however confident a cell and however saturated its ĥ (PMFS's product would round to zero)."""
+        x = omega / self.confidence_weight ** 2
+        cells = np.flatnonzero((x > 0) & self.geometry.free.ravel())
+        x = x[cells]
+        log_conf = np.log(-np.expm1(-x))
+        ell = (log_odds[cells] + _logit(self.prior_hit))[None, :]
+        log_h, log_not_h = -np.logaddexp(0.0, -ell), -np.logaddexp(0.0, ell)  # log ĥ, log(1 − ĥ)
+        h_sim = sim[:, self._block[cells]]
+        with np.errstate(divide="ignore"):  # log 0 = −inf enters logaddexp only beside a finite term
+            log_sim, log_not_sim = np.log(h_sim), np.log1p(-h_sim)
+            log_close = np.where(expit(ell) >= h_sim, np.logaddexp(log_not_h, log_sim),
+                                 np.logaddexp(log_not_sim, log_h))  # log(1 − abs(ĥ − h))
+            g = self.discrimination
+            log_g = np.logaddexp(np.log1p(-g), np.log(g) + log_close) if g < 1 else log_close
+        return np.logaddexp(-x[None, :], log_conf[None, :] + log_g).sum(axis=1)
 
     def _propose(self, obs: Observation):
         wind = self._wind
@@ -341,7 +356,7 @@ class FilamentPMFS(OlfactoryEstimator):
     @property
     def hit_map(self) -> np.ndarray:
         """(H, W) the measured hit probability ĥ = σ(ℓ)."""
-        return (1.0 / (1.0 + np.exp(-(self._log_odds + _logit(self.prior_hit))))).reshape(self.geometry.shape)
+        return expit(self._log_odds + _logit(self.prior_hit)).reshape(self.geometry.shape)
 
     @property
     def confidence(self) -> np.ndarray:

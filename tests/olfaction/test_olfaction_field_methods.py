@@ -163,6 +163,17 @@ def test_pmfs_predicts_a_reading_by_its_simulated_hit_maps():
     assert (gain >= 0).all() and (gain <= np.log(2) + 1e-12).all()
 
 
+def test_pmfs_saturated_cells_keep_a_positive_factor():
+    """400 hits at one cell: conf and ĥ round to 1 there, and a candidate whose simulation never reaches the cell
+    would get PMFS's factor 1 − 1 · 1 = 0 in floating point; in log space it keeps its tiny positive one."""
+    model = PlumeModel(np.zeros((6, 10), bool), resolution=0.1)
+    est = FilamentPMFS(model, refresh=1000, record_steps=20, warmup_steps=5)
+    for _ in range(400):
+        est.update((0.15, 0.15), True, wind=(0.3, 0.0))
+    assert est.confidence[1, 1] == 1.0 and est.hit_map[1, 1] == 1.0
+    assert np.isfinite(est.log_posterior).all()
+
+
 def test_pmfs_bad_input():
     model = _corridor()
     with pytest.raises(TypeError, match="PlumeModel"):
