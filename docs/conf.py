@@ -307,17 +307,25 @@ def _missing_reference(app, env, node, contnode):
     return None
 
 
-#: The paper's equation labels the docstrings cite (as ``label``); each links to its equation on the reference's
-#: "Paper <-> code" page.
-EQUATION_LABELS = ("decomposition-objective", "combined-conditionals", "pZcGivenSc", "prob-semantics-final")
+#: The paper's labelled equations: its own number (a count of its numbered equation environments) -> LaTeX label.
+#: Each links to its equation on the reference's "Paper <-> code" page, which tabulates all 31.
+PAPER_EQUATIONS = {1: "decomposition-objective", 11: "combined-conditionals", 15: "pZcGivenSc",
+                   20: "prob-semantics-final"}
 
 
 def _link_equations(app, what, name, obj, options, lines):
-    """``prob-semantics-final`` in a docstring becomes a link to that equation, still showing its label."""
+    """``eq. (20)`` in a docstring becomes a link to that equation; a LaTeX label cited as ````label```` shows the
+    paper's number and links the same way."""
     import re
 
-    pattern = re.compile(r"``(" + "|".join(map(re.escape, EQUATION_LABELS)) + r")``")
-    lines[:] = [pattern.sub(r":ref:`\1 <eq-\1>`", line) for line in lines]
+    numbers = "|".join(str(n) for n in PAPER_EQUATIONS)
+    by_label = {label: n for n, label in PAPER_EQUATIONS.items()}
+    cited = re.compile(r"\b([Ee]qs?\.) \((" + numbers + r")\)(?!\w)")
+    labelled = re.compile(r"``(" + "|".join(map(re.escape, by_label)) + r")``")
+    lines[:] = [labelled.sub(lambda m: f":ref:`({by_label[m.group(1)]}) <eq-{m.group(1)}>`",
+                             cited.sub(lambda m: f"{m.group(1)} :ref:`({m.group(2)}) "
+                                                 f"<eq-{PAPER_EQUATIONS[int(m.group(2))]}>`", line))
+                for line in lines]
 
 
 def setup(app):

@@ -4,9 +4,9 @@ The closed-form estimator of Ojeda, Monroy & Gonzalez-Jimenez, *PSGSL: A Probabi
 Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on full maps:
 
 * :func:`semantic_source_probability` — p(s_c | z) ∝ Σ_i p(o_ci | z_c)/p(o_ci) · p(o_ci | s_c)
-  (eq. ``prob-semantics-final``), with gas mixtures (Sec. "Probabilistic Gas Classification") and voxel
+  (eq. (20)), with gas mixtures (Sec. "Probabilistic Gas Classification") and voxel
   columns (Sec. "Voxelized Scene Representations");
-* :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. ``combined-conditionals``);
+* :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. (11));
 * :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
   :class:`ClassBeliefMap` — the robot's dense class beliefs over cells or voxels, frame by frame;
 * :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and

@@ -10,7 +10,7 @@ factorisation; Green's functions for all candidate sources from one adjoint solv
 * :class:`PMFSEstimator` — the PMFS family (the paper's baseline, Sec. "Validation"): a hit-probability map
   with confidence compared with the hit map each candidate source would produce.
 
-Either posterior is the olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
+Either posterior is the olfactory factor of eq. (11), p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
 and is combined with the semantic term by :func:`psgsl_pgm.fuse`.
 
 Hits are the robot's decision from its sensor's output (:class:`HitRule`: the rate of rise for a metal-oxide
