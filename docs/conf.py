@@ -38,6 +38,9 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax 3 copied into the site's _static/mathjax and loaded from there (mathjax_path), never from a CDN:
+    # the site typesets its formulas offline. The module's name has hyphens; Sphinx imports it by that name.
+    "sphinx-mathjax-offline",
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_nb",
@@ -99,6 +102,8 @@ sphinx_gallery_conf = {
     "reset_modules": ("matplotlib",),
     "show_memory": False,
     "show_signature": False,
+    # the execution-times page loads DataTables, jQuery and Bootstrap from CDNs: the site must read offline
+    "write_computation_times": False,
 }
 
 # ---------------------------------------------------------------- the reference: one page per public package
@@ -328,7 +333,21 @@ def _link_equations(app, what, name, obj, options, lines):
                 for line in lines]
 
 
+def _notebook_links(app, doctree):
+    """A Markdown link to a teaching notebook (``[03](notebooks/03_fusion.ipynb)``, written so that it also works
+    on GitHub) goes through docs/teaching/notebooks, a link to the repository's notebooks/; Sphinx resolves the
+    link to the notebook's real path, outside the source folder. Point it at the page the toctree builds."""
+    from sphinx import addnodes
+
+    real = (ROOT / "notebooks").as_posix()
+    for node in doctree.findall(addnodes.pending_xref):
+        target = node.get("reftarget", "")
+        if node.get("refdomain") == "doc" and target.startswith(real + "/"):
+            node["reftarget"] = "teaching/notebooks/" + target[len(real) + 1:]
+
+
 def setup(app):
+    app.connect("doctree-read", _notebook_links)
     app.connect("autodoc-process-docstring", _constant_doc)
     app.connect("autodoc-process-docstring", _link_equations)
     app.connect("missing-reference", _missing_reference)
