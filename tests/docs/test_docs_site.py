@@ -48,6 +48,14 @@ Promise.all(Array.from(document.images).map(img => {
         .then(ok => [img.getAttribute("src"), ok, img.closest(".cell_output") !== null]);
 }))
 """
+#: Every image of a notebook's executed outputs: [(src, alt text, caption of its figure), ...].
+FIGURES_JS = """
+Array.from(document.querySelectorAll(".cell_output img")).map(img => {
+    const figure = img.closest("figure");
+    const caption = figure ? figure.querySelector("figcaption") : null;
+    return [img.getAttribute("src"), img.getAttribute("alt") || "", caption ? caption.innerText.trim() : ""];
+})
+"""
 #: What the reader sees: the page title and the length of the article's text.
 PAGE_JS = """
 ({title: document.title,
@@ -136,6 +144,10 @@ def test_notebook_page_shows_its_figures(site, browser, notebook):
     assert page["article"] > 500, page
     figures = [src for src, ok, in_output in images if in_output and ok]
     assert figures, f"{notebook}: no figure among the executed outputs (images: {images})"
+    # every figure a notebook draws says what it shows: alt text for a reader who cannot see it, and a caption
+    described = browser.evaluate(FIGURES_JS)
+    bare = [src for src, alt, caption in described if not alt or alt == src or "_images/" in alt or not caption]
+    assert bare == [], f"{notebook}: figures without alt text or caption: {bare}"
 
 
 @pytest.mark.slow
