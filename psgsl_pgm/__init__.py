@@ -38,7 +38,35 @@ __version__ = "0.1.0"
 
 def load_world(path):
     """Load a world file (a user's house: map, rooms, objects, ontology, wind, sources); see
-    :func:`psgsl_pgm.sim.load_world`. Needs the ``sim`` extra."""
+    :func:`psgsl_pgm.sim.load_world`. Needs the ``sim`` extra.
+
+    Parameters
+    ----------
+    path : str or Path
+        The world file (YAML); the files it names are read relative to its folder.
+
+    Returns
+    -------
+    psgsl_pgm.sim.WorldSpec
+        The checked world: house, ontology, source region, wind, named sources and start.
+
+    Raises
+    ------
+    FileNotFoundError
+        The world file does not exist.
+    ValueError
+        Any bad key or file (also a missing file the world file names), naming the world file and the key.
+
+    Examples
+    --------
+    The world file the package ships (the simulated house of the validation experiment):
+
+    >>> from importlib.resources import as_file, files
+    >>> with as_file(files("psgsl_pgm") / "data" / "worlds" / "house.yaml") as path:
+    ...     world = load_world(path)
+    >>> world.summary()["grid"]["rows"], world.summary()["grid"]["resolution"]
+    (120, 0.1)
+    """
     from .sim import load_world as _load_world
 
     return _load_world(path)
