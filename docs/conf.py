@@ -166,11 +166,13 @@ html_title = f"psgsl-pgm {release}"
 html_static_path = ["_static"]
 html_css_files = ["psgsl.css"]
 html_show_sourcelink = False
+html_sourcelink_suffix = ""  # the copied sources keep their own suffix: a notebook downloads as .ipynb
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "header_links_before_dropdown": 7,
-    "secondary_sidebar_items": ["page-toc"],
+    # a notebook's page also offers the notebook itself (docs/_templates/download-notebook.html: empty elsewhere)
+    "secondary_sidebar_items": ["download-notebook", "page-toc"],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }

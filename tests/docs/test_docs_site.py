@@ -27,6 +27,7 @@ import os
 import re
 import subprocess
 import sys
+import urllib.parse
 from pathlib import Path
 
 import pytest
@@ -148,6 +149,11 @@ def test_notebook_page_shows_its_figures(site, browser, notebook):
     described = browser.evaluate(FIGURES_JS)
     bare = [src for src, alt, caption in described if not alt or alt == src or "_images/" in alt or not caption]
     assert bare == [], f"{notebook}: figures without alt text or caption: {bare}"
+    # and the notebook itself, to run
+    links = browser.evaluate("Array.from(document.querySelectorAll('a[download]')).map(a => a.href)")
+    assert any(link.endswith(f"{notebook}.ipynb") for link in links), f"{notebook}: no download link: {links}"
+    for link in links:
+        assert Path(urllib.parse.unquote(urllib.parse.urlparse(link).path)).is_file(), f"{notebook}: {link} missing"
 
 
 @pytest.mark.slow
