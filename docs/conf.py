@@ -104,6 +104,11 @@ sphinx_gallery_conf = {
     "show_signature": False,
     # the execution-times page loads DataTables, jQuery and Bootstrap from CDNs: the site must read offline
     "write_computation_times": False,
+    # names of the package in the examples' code link to their reference pages, and each reference page lists the
+    # examples that use it ("Examples using ...", the minigallery of docs/_templates/autosummary)
+    "doc_module": ("psgsl_pgm",),
+    "reference_url": {"psgsl_pgm": None},
+    "backreferences_dir": str(DOCS / "reference" / "api" / "backreferences"),
 }
 
 # ---------------------------------------------------------------- the reference: one page per public package
