@@ -1,7 +1,7 @@
 """The paper's estimator: the semantic term, fusion, information gain, class beliefs, the ontology, the problem.
 
-* :func:`semantic_source_probability` — p(s_c | z) (eq. ``prob-semantics-final``), :func:`fuse` — p(s_c | g, z)
-  (eq. ``combined-conditionals``), :func:`semantic_information_gain` — I(S; O_n) (Sec. "Information Gain
+* :func:`semantic_source_probability` — p(s_c | z) (eq. (20)), :func:`fuse` — p(s_c | g, z)
+  (eq. (11)), :func:`semantic_information_gain` — I(S; O_n) (Sec. "Information Gain
   Optimization");
 * :func:`update_class_probs`, :func:`room_evidence`, :class:`ClassBeliefMap` — the class beliefs p(o_c | z_c);
 * :class:`Ontology` — p(o | s, γ), p(o), p(o | room); :func:`kitchen_ontology`, :func:`kitchen_example`;

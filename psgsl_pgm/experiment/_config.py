@@ -165,6 +165,23 @@ def parse_source(spec) -> str | tuple:
     """A source specification: an object class name (``"oven"``: the centre of the house's first oven) or a
     position ``"x,y"`` in metres (a string or a pair of numbers).
 
+    Parameters
+    ----------
+    spec : str or (2,) array_like of float
+        ``"oven"``, ``"2.5,6.0"`` or ``(2.5, 6.0)``.
+
+    Returns
+    -------
+    str or (2,) tuple of float
+        The class name, or the position (x, y) in metres.
+
+    Raises
+    ------
+    TypeError
+        Neither a string nor a pair of numbers (bytes, a boolean, a complex number).
+    ValueError
+        An empty string, a single number, or a position that does not read as two finite numbers.
+
     Examples
     --------
     >>> parse_source("oven"), parse_source("2.5,6.0"), parse_source((1, 2))

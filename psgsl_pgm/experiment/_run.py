@@ -9,7 +9,7 @@ Data flow per stop (paper Secs. "Model" and "Validation"):
                                                                                 └──> p(s | g, z)   "semantics+rooms"
 
 The olfactory estimator is one object shared by the three variants, so they differ *only* in the semantic
-factor of eq. ``combined-conditionals``.
+factor of eq. (11).
 """
 
 from __future__ import annotations

@@ -73,7 +73,7 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
 
 
 def semantic_terms(maps, likelihood, class_prior):
-    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W).
+    """p(s | z) of each class-belief map (eq. (20)); (len(maps), H, W).
 
     Voxel maps (H, W, L, k) are reduced to columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene
     Representations").
