@@ -308,24 +308,36 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                     estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
                     search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
                     world_spec=None, recorder=None) -> SearchRun:
-    """Run one closed-loop search in the simulated house.
+    """Run one closed-loop search in the simulated house: the robot senses, updates its beliefs, chooses its next
+    stop, and declares the source (module docstring).
 
     Parameters
     ----------
     source : str or (2,) array_like
-        :func:`psgsl_pgm.experiment.parse_source`.
+        The true source: an object class of the house (the first object of that class emits), a world file's source
+        name, or a position "x,y" / (x, y) in metres (:func:`psgsl_pgm.experiment.parse_source`).
     seed : int
-        World seed (house jitter, wind, gas, sensors, detector).
-    policy : {"tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object"}
+        World seed (house jitter, wind, gas, sensors, detector, the source detector's misses).
+    policy : str
+        How the robot chooses its next stop, one of :data:`psgsl_pgm.search.POLICIES`: ``"tour"`` (the
+        validation experiment's fixed exploration tour, back and forth), ``"greedy"`` (the most probable reachable
+        cell), ``"infotaxis"`` (φ = φ_G + φ_O per second, eq. (29)), ``"space-aware-infotaxis"``,
+        ``"semantic-modes"`` and ``"nearest-object"`` (semantics alone), or a method of the field
+        (``"entrotaxis"``, ``"surge-cast"``, ``"spiral"``; :mod:`psgsl_pgm.search._policies`).
     variant : {"olfaction", "semantics", "semantics+rooms"}
-        Which posterior the robot uses (the experiment's code path for it).
-    estimator : {"infotaxis", "pmfs"}
+        Which posterior the robot uses (the experiment's code path for it): p(s | g) alone, fused with p(s | z) of
+        class beliefs from the camera, or of class beliefs that start from the room map.
+    estimator : str
+        The olfactory estimator giving p(s | g), one of :data:`psgsl_pgm.experiment.ESTIMATORS`.
     config : ExperimentConfig, optional, keyword-only
-        Physics and estimator settings (the validation experiment's).
+        Physics, estimator and world-model settings (the validation experiment's; default ``ExperimentConfig()``).
     search : SearchConfig, optional, keyword-only
+        The loop's settings: found radius, budget, candidates, the declaration rule and how a run ends (default
+        ``SearchConfig()``).
     world : psgsl_pgm.sim.World, optional, keyword-only
+        A prepared world (default: built from ``world_spec`` or the embedded house with ``seed`` and ``source``).
     space : FreeSpace, optional, keyword-only
-        Prepared geometry of the world's house (shares caches between runs).
+        Prepared geometry of the world's house (shares caches between runs of one house).
     world_spec : world, optional, keyword-only
         The house, ontology, source region (the estimators' prior) and mapper beliefs
         (:func:`psgsl_pgm.load_world`); default: the embedded house, :func:`psgsl_pgm.sim.default_world` — the
@@ -338,6 +350,23 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     Returns
     -------
     SearchRun
+        The run's trajectory, per-stop metrics, final posterior and its declaration.
+
+    Raises
+    ------
+    TypeError
+        ``search`` is not a :class:`SearchConfig`, or ``seed`` is not an integer.
+    ValueError
+        An unknown policy, variant, estimator or source; ``olfaction`` with a semantics-alone policy, or a
+        semantic variant with a reactive one.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.search import SearchConfig, run_closed_loop
+    >>> run = run_closed_loop("oven", 0, "nearest-object", "semantics+rooms",
+    ...                       search=SearchConfig(time_budget=120.0))  # doctest: +SKIP
+    >>> run.declared, run.declared_correct  # doctest: +SKIP
+    (True, True)
     """
 
     search = SearchConfig() if search is None else search
