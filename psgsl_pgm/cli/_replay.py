@@ -90,6 +90,12 @@ def run(args) -> int:
           f"{run_.config['threshold']:g} ppm), {res.n_frames} detection frames"
           + (f", {res.skipped} detections of unknown classes skipped" if res.skipped else "")
           + f"; topics {', '.join(f'{k}={v}' for k, v in res.bag.topics.items() if v)}")
+    outside = {k: v for k, v in res.bag.skipped.items() if v}
+    if outside:
+        print("  skipped outside the overlap of the streams: "
+              + ", ".join(f"{v} {k} message{'s' if v > 1 else ''}" for k, v in outside.items()))
+    for text in res.assumptions:
+        print(f"  {text}")
     from ..experiment import VARIANTS
 
     for v, name in enumerate(VARIANTS):

@@ -7,7 +7,9 @@ detections on one clock. They become the steps of one run:
   threshold rule (``value >= threshold``, :class:`psgsl_pgm.sim.GasSensor`; the world's sensor unless
   ``threshold`` is given);
 * its wind is the anemometer's reading interpolated to the same stamp (exact at an equal stamp; otherwise
-  linear between the readings around it, within the tolerance);
+  linear between the readings around it, within the tolerance). A bag without wind readings replays with none:
+  the estimators then assume still air (:data:`NO_WIND`, said in the result's ``assumptions``);
+* readings outside the overlap of the streams are skipped and counted (:attr:`psgsl_pgm.ros.BagData.skipped`);
 * the detection arrays stamped from this gas reading up to the next (those before the first reading go to the
   first step) are the step's camera frames: the camera looks from the array's frame; every free cell in its
   field of view (:class:`psgsl_pgm.sim.Camera`, the same as the simulator's) is "seen", labelled "nothing"
@@ -42,12 +44,17 @@ from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
 from ._run import RunResult, run_config, step_metrics
 from ._step import VariantPosteriors
 
-__all__ = ["ReplayResult", "replay", "replay_frames", "replay_steps", "write_replay"]
+__all__ = ["NO_WIND", "ReplayResult", "replay", "replay_frames", "replay_steps", "write_replay"]
+
+#: What the estimators assume when the bag holds no wind reading.
+NO_WIND = ("no wind readings: the estimators assume still air (the plume model's mean wind stays zero, so the "
+           "plume spreads by diffusion alone, and PMFS's hit kernel is round)")
 
 
 class ReplayResult(SimpleNamespace):
     """What :func:`replay` returns: ``run`` (RunResult), ``posteriors`` (list of (3, H, W) per step, when kept),
-    ``final`` (3, H, W), ``bag`` (BagData), ``house``, ``skipped`` (detections of unknown classes)."""
+    ``final`` (3, H, W), ``bag`` (BagData), ``house``, ``skipped`` (detections of unknown classes),
+    ``assumptions`` (list of str: what the estimators assumed for missing streams)."""
 
 
 def replay_frames(bag, house, detector: DetectorModel, camera: Camera):
@@ -110,8 +117,11 @@ def replay_steps(bag, frames, *, threshold: float, tolerance: float):
     """``[(t_ns, stop (2,), hit, value, wind (2,), [Frame, ...])]``, one per gas reading (module docstring)."""
     from ..ros._time import interpolate
 
-    where = f"{bag.path}: topic {bag.topics['wind']}"
-    wind = interpolate(bag.wind_t, bag.wind, bag.gas_t, tolerance=tolerance, where=where, describe=bag.describe)
+    if len(bag.wind_t):
+        where = f"{bag.path}: topic {bag.topics['wind']}"
+        wind = interpolate(bag.wind_t, bag.wind, bag.gas_t, tolerance=tolerance, where=where, describe=bag.describe)
+    else:  # no anemometer: no wind per step (the estimators' assumption is :data:`NO_WIND`)
+        wind = [None] * len(bag.gas_t)
     ft = np.array([t for t, _ in frames], dtype=np.int64)
     # frames stamped in [t_k, t_{k+1}) go to step k; frames before the first reading to step 0
     owner = np.maximum(np.searchsorted(bag.gas_t, ft, side="right") - 1, 0)
@@ -243,8 +253,9 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
     cfg.update(bag=str(data.path), topics=data.topics, threshold=threshold, tolerance=tolerance)
     run = RunResult(label, int(seed), estimator, truth_xy, times, pos, hits, err, spr, {n: post}, cfg, region_hit,
                     area, level)
+    assumptions = [] if len(data.wind_t) else [NO_WIND]
     return ReplayResult(run=run, posteriors=kept, final=post, bag=data, house=house, skipped=skipped,
-                        n_frames=len(frames))
+                        n_frames=len(frames), assumptions=assumptions)
 
 
 def write_replay(result: ReplayResult, out) -> list:
@@ -265,7 +276,8 @@ def write_replay(result: ReplayResult, out) -> list:
     written = [save_run(run, out / "run.npz"), write_csv([run], out / "metrics.csv")]
     summary = summarize([run]) if np.isfinite(run.source_xy).all() else {}
     summary.update(bag=str(result.bag.path), steps=run.n_steps, frames=result.n_frames,
-                   skipped_detections=result.skipped, final_spread=dict(zip(VARIANTS, map(float, run.spread[-1]))),
+                   skipped_detections=result.skipped, outside_overlap=dict(result.bag.skipped),
+                   assumptions=list(result.assumptions), final_spread=dict(zip(VARIANTS, map(float, run.spread[-1]))),
                    final_region_area=dict(zip(VARIANTS, map(float, run.region_area[-1]))))
     written.append(write_summary(summary, out / "summary.json"))
     for v, p in zip(VARIANTS, result.final):

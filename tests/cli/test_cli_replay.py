@@ -125,3 +125,23 @@ def test_record_reaches_the_grid(monkeypatch, tmp_path, command, module, functio
     for extra, want in (([], False), (["--record"], True)):
         assert cli.main([*command, *extra, "--out", str(tmp_path / "o")]) == 2
         assert seen[-1] is want
+
+
+def test_a_bag_without_wind_replays_and_says_what_it_assumes(tmp_path, capsys):
+    from tests.ros.bags import rewrite
+
+    bag = episode_bag(tmp_path / "bag")
+    calm = rewrite(bag, tmp_path / "calm", keep=lambda topic, t, m: topic not in ("/wind", "/anemometer"))
+    out = tmp_path / "out"
+    assert cli.main(["replay", str(calm), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "10 gas readings (5 hits at >= 1 ppm)" in text and "wind=" not in text
+    assert "no wind readings: the estimators assume still air" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["assumptions"] and summary["assumptions"][0].startswith("no wind readings")
+    assert summary["outside_overlap"] == {"gas": 0, "wind": 0, "detections": 0}
+    # the same bag with its wind replays to other posteriors: the wind is used when it is there
+    assert cli.main(["replay", str(bag), "--out", str(tmp_path / "windy")]) == 0
+    assert "assume still air" not in capsys.readouterr().out
+    assert not np.array_equal(np.load(out / "posterior-olfaction.npy"),
+                              np.load(tmp_path / "windy" / "posterior-olfaction.npy"))
