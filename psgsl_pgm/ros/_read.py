@@ -4,8 +4,9 @@ Topics are found by message type (:data:`ROLES`), or named per role (``topics={"
 
 * ``pose``: ``tf2_msgs/msg/TFMessage`` on ``/tf`` (with ``/tf_static``), else
   ``geometry_msgs/msg/PoseWithCovarianceStamped`` or ``PoseStamped`` — the robot frame's pose in the map frame;
-* ``gas``: ``olfaction_msgs/msg/GasSensor`` (field ``raw``), else ``std_msgs/msg/Float32`` / ``Float64`` — the
-  reading at its header stamp (a Float has none: the bag's receive time);
+* ``gas``: ``olfaction_msgs/msg/GasSensor`` (field ``raw``, its unit from ``raw_units``), else
+  ``std_msgs/msg/Float32`` / ``Float64`` (no unit in the message) — the reading at its header stamp (a Float has
+  none: the bag's receive time);
 * ``wind`` (optional): ``geometry_msgs/msg/Vector3Stamped``, else ``olfaction_msgs/msg/Anemometer`` — the wind
   vector in the map frame: a Vector3 rotated from its frame; an Anemometer's speed and direction (the direction
   the wind comes FROM, in the sensor frame, as GADEN publishes it). A bag without one (or with an empty one) has
@@ -38,7 +39,7 @@ import numpy as np
 
 from ..geometry._grid import GridMap
 from ._time import DEFAULT_TOLERANCE, check_increasing, interpolate
-from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, typestore
+from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, UNIT_NAMES, typestore
 
 __all__ = ["META_TOPIC", "ROLES", "BagData", "Detections", "bag_topics", "read_bag"]
 
@@ -106,7 +107,7 @@ class BagData:
     pose_t : (p,) int64 ndarray, pose : (p, 3) ndarray
         Robot pose samples (x, y, yaw) in the map frame.
     gas_t : (m,) int64 ndarray, gas : (m,) ndarray, gas_xy : (m, 2) ndarray
-        Gas readings and where they were taken.
+        Gas readings as the messages hold them (in ``gas_units``) and where they were taken.
     wind_t : (w,) int64 ndarray, wind : (w, 2) ndarray
         Wind readings in the map frame, m/s.
     detections : list of Detections
@@ -133,6 +134,8 @@ class BagData:
     grid: GridMap | None = None
     meta: dict = field(default_factory=dict)
     skipped: dict = field(default_factory=dict)
+    gas_units: str | None = None
+    """The gas messages' unit (:data:`psgsl_pgm.ros._types.UNIT_NAMES`), None when the type has none (a Float)."""
 
     def describe(self, t_ns: int) -> str:
         """A time for messages: seconds into the bag and the stamp."""
@@ -376,7 +379,7 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
 
     tree = _Tree(name, describe, tolerance)
     pose_is_tf = chosen["pose"] in tf_topics
-    gas_t, gas_v, gas_frames = [], [], []
+    gas_t, gas_v, gas_frames, gas_units = [], [], [], {}
     wind_t, wind_v, wind_frames, wind_kind = [], [], [], None
     dets, grid, meta = [], None, {}
     for topic, t_recv, msg in raw:
@@ -396,6 +399,7 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
                 gas_t.append(_stamp(msg.header))
                 gas_v.append(float(msg.raw))
                 gas_frames.append(_frame(msg.header.frame_id))
+                gas_units.setdefault(int(msg.raw_units), _stamp(msg.header))
             else:
                 gas_t.append(t_recv)
                 gas_v.append(float(msg.data))
@@ -464,6 +468,11 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
         raise ValueError(f"{name}: topic {chosen['gas']}: no gas reading lies where the streams overlap "
                          f"({'; '.join(spans)})")
     gas_t, gas_v = gas_t[keep], np.asarray(gas_v, dtype=np.float64)[keep]
+    if len(gas_units) > 1:
+        (u0, t0), (u1, t1) = sorted(gas_units.items(), key=lambda kv: kv[1])[:2]
+        raise ValueError(f"{name}: topic {chosen['gas']}: the readings change unit at {describe(t1)} (raw_units "
+                         f"{UNIT_NAMES.get(u0, u0)} from {describe(t0)}, then {UNIT_NAMES.get(u1, u1)})")
+    units = UNIT_NAMES.get(next(iter(gas_units)), f"raw_units {next(iter(gas_units))}") if gas_units else None
     gas_xy = _per_frame(tree, gas_t, [f for f, k in zip(gas_frames, keep) if k], map_frame)[:, :2]
     detections, skipped["detections"] = _detections(name, chosen["detections"], dets, tree, frame_of, map_frame,
                                                     robot_frame, describe)
@@ -472,7 +481,7 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     if not np.isfinite(gas_xy).all() or not np.isfinite(wind).all():
         raise ValueError(f"{name}: a gas or wind reading or its pose is not finite")
     return BagData(Path(path), chosen, int(start), pose_t, pose, gas_t, gas_v, gas_xy, wind_t, wind,
-                   detections, grid, meta, skipped)
+                   detections, grid, meta, skipped, units)
 
 
 def _per_frame(tree: _Tree, t_ns: np.ndarray, frames: list, map_frame: str) -> np.ndarray:

@@ -145,3 +145,61 @@ def test_a_bag_without_wind_replays_and_says_what_it_assumes(tmp_path, capsys):
     assert "assume still air" not in capsys.readouterr().out
     assert not np.array_equal(np.load(out / "posterior-olfaction.npy"),
                               np.load(tmp_path / "windy" / "posterior-olfaction.npy"))
+
+
+def _in_units(bag, dst, units, factor):
+    """``bag`` with its GasSensor readings multiplied by ``factor`` and labelled with ``raw_units`` ``units``."""
+    import dataclasses
+
+    from tests.ros.bags import rewrite
+
+    def change(topic, t, msg):
+        if topic == "/gas":
+            return dataclasses.replace(msg, raw=msg.raw * factor, raw_units=units)
+        return msg
+
+    return rewrite(bag, dst, change=change)
+
+
+def test_gas_units_are_read_from_the_message(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag")
+    ohms = _in_units(bag, tmp_path / "mox", 5, 10_000.0)  # a MOX sensor's resistance: 20 000 and 5 000 ohm
+    assert cli.main(["replay", str(ohms), "--out", str(tmp_path / "o1")]) == 2
+    line = _error_line(capsys)
+    assert "topic /gas: the readings are in ohm (the GasSensor's raw_units), not ppm" in line
+    assert "--gas-conversion SCALE[,OFFSET]" in line and not (tmp_path / "o1").exists()
+    # with the user's conversion: ppm = 1e-4 × raw gives the original readings back, so the original hits
+    assert cli.main(["replay", str(ohms), "--gas-conversion", "1e-4", "--out", str(tmp_path / "o2"), "--quiet"]) == 0
+    assert "10 gas readings (5 hits at >= 1 ppm)" in capsys.readouterr().out
+    ppb = _in_units(bag, tmp_path / "ppb", 4, 1000.0)  # ppb: converted exactly, no option needed
+    assert cli.main(["replay", str(ppb), "--out", str(tmp_path / "o3"), "--quiet"]) == 0
+    assert "10 gas readings (5 hits at >= 1 ppm)" in capsys.readouterr().out
+
+
+def test_replay_shows_a_progress_bar_unless_quiet(tmp_path, capsys):
+    bag = episode_bag(tmp_path / "bag")
+    assert cli.main(["replay", str(bag), "--out", str(tmp_path / "o")]) == 0
+    assert "psgsl replay: gas readings: 100%" in capsys.readouterr().err
+    assert cli.main(["replay", str(bag), "--out", str(tmp_path / "q"), "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_the_posterior_figure_is_labelled(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from psgsl_pgm.experiment._replay import replay, replay_figure
+
+    res = replay(episode_bag(tmp_path / "bag"), source="6.0,6.0")
+    fig = replay_figure(res)
+    try:
+        panels = [ax for ax in fig.axes if ax.get_title()]
+        bars = [ax for ax in fig.axes if ax.get_ylabel() == "p(s | …) per cell"]
+        assert len(panels) == 3 and len(bars) == 3  # a colour bar beside each variant's panel
+        assert all(ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)" for ax in panels)
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert labels == ["90 % credible region", "path (from its start)", "walls and furniture", "true source"]
+    finally:
+        plt.close(fig)
