@@ -20,7 +20,9 @@ from psgsl_pgm.sim import (
     save_room_map,
 )
 
-SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B"
+from tests.sim.house_b import house_b_folder
+
+SHARED = house_b_folder()
 
 
 # ---- GridMap -------------------------------------------------------------------------------------------------

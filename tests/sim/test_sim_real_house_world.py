@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 import yaml
 
-SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B"
+from tests.sim.house_b import house_b_folder
+
+SHARED = house_b_folder()
 
 pytestmark = [pytest.mark.shared_data,
               pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/mapir_house_B is absent")]
