@@ -157,3 +157,20 @@ def test_typos_in_the_labs_files_are_refused(tmp_path, capsys):
     (tmp_path / "onto_typo.yaml").write_text(onto)
     assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_typo.yaml"))]) == 2
     assert "expected key 'Gases' (the lab's layout" in capsys.readouterr().err
+
+
+def test_a_source_found_at_the_start_is_refused_by_check_and_search_alike(tmp_path, capsys):
+    """B4 lies 0.2 m from the lab's start, within the 0.5 m found radius: world check and search refuse it in one
+    line (a search would end before its first reading), and search writes nothing."""
+    from psgsl_pgm.cli._main import main
+
+    path = write_real_world(tmp_path, sources={"B4": [-3.2, -3.3]})
+    out = tmp_path / "out"
+    assert main(["world", "check", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "source 'B4' is found at the start: the start (-3, -3.3) is 0.20 m from it" in err[0]
+    assert main(["search", "--world", str(path), "--sources", "B4", "--seeds", "1", "--policies", "greedy",
+                 "--variants", "olfaction", "--workers", "1", "--quiet", "--out", str(out)]) == 2
+    assert "is found at the start" in capsys.readouterr().err and not out.exists()
+    # below the distance, it is a source like any other
+    assert main(["world", "check", str(path), "--found-radius", "0.15"]) == 0
