@@ -185,9 +185,10 @@ def world_sources(args):
 
     spec = None
     if args.world is not None:
-        from ..sim import load_world
+        from ..sim import check_free_cells, load_world
 
         spec = load_world(args.world)
+        check_free_cells(spec)  # a map too fine for the runs' memory: one line naming 'resolution', nothing run
     names = args.sources
     if names is None:
         names = list(spec.sources) if spec is not None else list(DEFAULT_SOURCES)

@@ -216,6 +216,10 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         setting = dataclasses.replace(setting, fixed_house=house, source_region="free", class_beliefs=None,
                                       start=None, sources={})
     house = setting.house(int(seed))
+    if world is not None and not bag_map:
+        from ..sim import check_free_cells
+
+        check_free_cells(setting, int(seed))
     if source is None and meta.get("source") is not None:
         source = meta["source"]
     truth = None if source is None else setting.resolve_source(parse_source(source), house)

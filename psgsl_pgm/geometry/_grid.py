@@ -93,7 +93,8 @@ class GridMap:
             raise ValueError(f"xy must have shape (..., 2) (x, y in metres), got shape {p.shape}")
         col = np.floor((p[..., 0] - self.origin[0]) / self.resolution)
         row = np.floor((p[..., 1] - self.origin[1]) / self.resolution)
-        return np.stack([row, col], axis=-1).astype(np.int64)
+        far = float(2**62)  # a point beyond int64 (x = 1e30 m) is a cell far outside, not an overflowing cast
+        return np.clip(np.stack([row, col], axis=-1), -far, far).astype(np.int64)
 
     def cell_to_world(self, rc) -> np.ndarray:
         """Map-frame centres (x, y) of grid cells; inverse of :meth:`world_to_cell` on cell centres.

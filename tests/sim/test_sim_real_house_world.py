@@ -157,6 +157,14 @@ def test_typos_in_the_labs_files_are_refused(tmp_path, capsys):
     (tmp_path / "onto_typo.yaml").write_text(onto)
     assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_typo.yaml"))]) == 2
     assert "expected key 'Gases' (the lab's layout" in capsys.readouterr().err
+    # a class spelled differently in the ontology and the room table: the room's 'microwave' would be an 'other'
+    onto = (SHARED / "ontology.yaml").read_text().replace("microwave", "microwve")
+    (tmp_path / "onto_microwve.yaml").write_text(onto)
+    assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_microwve.yaml"))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ("key 'room_categories.Kitchen': class 'microwave' is not one of the ontology's "
+                                     "classes, so it would count as 'other' — did you mean the ontology's 'microwve'?"
+                                     in err)
 
 
 def test_a_source_found_at_the_start_is_refused_by_check_and_search_alike(tmp_path, capsys):
