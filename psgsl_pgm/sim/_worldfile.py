@@ -691,6 +691,22 @@ def check_free_cells(spec: WorldSpec, seed: int = 0, *, limit: int = MAX_FREE_CE
                      "world file")
 
 
+def _on_furniture(where: str, name: str, xy, house: House, region) -> str:
+    """The message for a source on an occupied cell inside a room: furniture the map draws as occupied."""
+    import scipy.ndimage as ndi
+
+    g = house.grid
+    rc = g.world_to_cell(xy)
+    room = house.room_names[int(house.room_labels[rc[0], rc[1]])]
+    _, (ri, ci) = ndi.distance_transform_edt(~region, return_indices=True)
+    near = g.cell_to_world(np.array([[ri[rc[0], rc[1]], ci[rc[0], rc[1]]]]))[0]
+    return (f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies on furniture: an occupied cell of the "
+            f"map inside the room {room} (the map draws furniture as occupied, and a source must lie in a free "
+            f"cell); use a walls-only map with the furniture listed under 'objects' (then 'sources.{name}' may name "
+            f"the emitting object's class), or move the source to the nearest free cell of the source region, "
+            f"({near[0]:.2f}, {near[1]:.2f})")
+
+
 def _check_positions(where: str, spec: WorldSpec, house: House) -> None:
     g = house.grid
     start = spec.start_for(house)
@@ -711,6 +727,8 @@ def _check_positions(where: str, spec: WorldSpec, house: House) -> None:
         rc = g.world_to_cell(xy)
         if not g.contains(rc):
             raise ValueError(f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies outside the map {g.extent}")
+        if not region[rc[0], rc[1]] and g.occupancy[rc[0], rc[1]] and house.room_labels[rc[0], rc[1]] >= 0:
+            raise ValueError(_on_furniture(where, name, xy, house, region))
         if not region[rc[0], rc[1]]:
             raise ValueError(f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies outside the source region "
                              f"({spec.source_region if isinstance(spec.source_region, str) else 'mask'}) or on a wall")

@@ -182,3 +182,44 @@ def test_a_source_found_at_the_start_is_refused_by_check_and_search_alike(tmp_pa
     assert "is found at the start" in capsys.readouterr().err and not out.exists()
     # below the distance, it is a source like any other
     assert main(["world", "check", str(path), "--found-radius", "0.15"]) == 0
+
+
+def test_the_example_world_file_of_house_b_checks(tmp_path, capsys):
+    """examples/house_b: the world file, its walls map YAML and object list, pointed at the lab's folder (the
+    prefix replaced as its README says), pass world check with every source; the folder holds none of the lab's
+    files."""
+    import shutil
+
+    from psgsl_pgm.cli._main import main
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "house_b"
+    assert sorted(p.name for p in example.iterdir()) == ["README.rst", "objects.yaml", "walls.yaml", "world.yaml"]
+    for name in ("world.yaml", "walls.yaml"):
+        text = (example / name).read_text()
+        assert "../../../shared/data/mapir_house_B" in text
+        (tmp_path / name).write_text(text.replace("../../../shared/data/mapir_house_B", str(SHARED)))
+    shutil.copy(example / "objects.yaml", tmp_path)
+    assert main(["world", "check", str(tmp_path / "world.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "grid: 114 x 87 cells of 0.1 m" in out
+    for name, room in (("B1", "Kitchen"), ("B2", "Bathroom"), ("B3", "LivingRoom")):
+        assert f"source {name}: " in out and f"in {room}" in out.split(f"source {name}: ")[1].splitlines()[0]
+
+
+def test_a_source_on_furniture_says_so_and_what_to_do(tmp_path, capsys):
+    """The lab's furnished map draws furniture as occupied: B2 and B3 lie on it. The message says furniture (not
+    a wall), names the room and offers the walls-only map with objects, or the nearest free cell."""
+    from psgsl_pgm.cli._main import main
+
+    path = write_real_world(tmp_path, map=str(SHARED / "_occupancy.yaml"), sources={"B2": [-0.4, -2.9]})
+    assert main(["world", "check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert ("key 'sources.B2' (-0.4, -2.9) lies on furniture: an occupied cell of the map inside the room Bathroom"
+            in err)
+    assert "use a walls-only map with the furniture listed under 'objects'" in err
+    near = [float(v) for v in err.rsplit("(", 1)[1].rstrip(")\n").split(", ")]
+    from psgsl_pgm import load_world
+
+    path = write_real_world(tmp_path, map=str(SHARED / "_occupancy.yaml"), sources={"B2": near})
+    assert load_world(path).sources["B2"] == tuple(near) or list(load_world(path).sources["B2"]) == near
