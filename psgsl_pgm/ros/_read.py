@@ -60,6 +60,11 @@ ROLES = {
 }
 _REQUIRED = ("pose", "gas")
 
+#: Fastest wind reading a bag may hold, m/s: beyond a category-5 hurricane (sustained winds of 70 m/s and more on
+#: the Saffir-Simpson scale, NOAA National Hurricane Center). A faster reading is a unit or encoding slip (and
+#: would overflow the wind estimate's sums of squares).
+MAX_WIND_READING = 100.0
+
 #: A JSON std_msgs/String the project's writer adds: the episode's world, source, seed and estimator.
 META_TOPIC = "/psgsl/episode"
 
@@ -249,6 +254,9 @@ class _Tree:
             raise ValueError(f"{self.bag}: topic {topic} at {self.describe(t_ns)}: frame {child!r} has two parents, "
                              f"{old!r} and {parent!r}")
         self.parent[child] = parent
+        if not np.isfinite(np.asarray(pose, dtype=np.float64)).all():
+            raise ValueError(f"{self.bag}: topic {topic} at {self.describe(t_ns)}: the transform {parent} -> {child} "
+                             f"holds a number that is not finite ({tuple(float(v) for v in pose)})")
         if static:
             self.static[child] = np.asarray(pose, dtype=np.float64)
         else:
@@ -439,6 +447,12 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     if chosen["wind"] is not None:
         check_increasing(wind_t, f"{name}: topic {chosen['wind']}", describe=describe)
     wv = np.asarray(wind_v, dtype=np.float64).reshape(-1, 2)
+    speed = np.abs(wv[:, 0]) if wind_kind == "anemometer" else np.hypot(wv[:, 0], wv[:, 1])
+    bad = np.flatnonzero(~np.isfinite(wv).all(axis=1) | ~(speed <= MAX_WIND_READING))
+    if len(bad):
+        raise ValueError(f"{name}: topic {chosen['wind']} at {describe(int(wind_t[bad[0]]))}: the reading "
+                         f"{tuple(float(v) for v in wv[bad[0]])} is not a wind (finite, at most "
+                         f"{MAX_WIND_READING:g} m/s)")
     frames = [f if f == map_frame else frame_of(f) for f in wind_frames]
     # wind samples the transforms of their frame cover (a map-frame sample: the robot's, for its pose)
     keep = tree.inside(wind_t, [robot_frame if f == map_frame else f for f in frames], map_frame)
@@ -453,6 +467,10 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
         wind = wv[:, :1] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
     gas_t = np.asarray(gas_t, dtype=np.int64)
     check_increasing(gas_t, f"{name}: topic {chosen['gas']}", describe=describe)
+    bad = np.flatnonzero(~np.isfinite(np.asarray(gas_v, dtype=np.float64)))
+    if len(bad):
+        raise ValueError(f"{name}: topic {chosen['gas']} at {describe(int(gas_t[bad[0]]))}: the reading "
+                         f"{gas_v[bad[0]]} is not a finite number")
     gas_frames = [frame_of(f) for f in gas_frames]
     keep = tree.inside(gas_t, gas_frames, map_frame)
     if chosen["wind"] is not None:  # a gas reading needs the wind on both sides too
