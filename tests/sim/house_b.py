@@ -8,10 +8,15 @@ from pathlib import Path
 _REPO = Path(__file__).resolve().parents[2]
 
 
-def house_b_folder() -> Path:
-    """The first ``<ancestor>/shared/data/mapir_house_B`` above the repository (the one beside it when none is)."""
+def shared_data(name: str) -> Path:
+    """The first ``<ancestor>/shared/data/<name>`` above the repository (the one beside it when none is)."""
     for up in [_REPO.parent, *_REPO.parent.parents]:
-        folder = up / "shared" / "data" / "mapir_house_B"
+        folder = up / "shared" / "data" / name
         if folder.is_dir():
             return folder
-    return _REPO.parent / "shared" / "data" / "mapir_house_B"
+    return _REPO.parent / "shared" / "data" / name
+
+
+def house_b_folder() -> Path:
+    """The lab's house B: :func:`shared_data` ``("mapir_house_B")``."""
+    return shared_data("mapir_house_B")
