@@ -488,8 +488,8 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     gas_t, gas_v = gas_t[keep], np.asarray(gas_v, dtype=np.float64)[keep]
     if len(gas_units) > 1:
         (u0, t0), (u1, t1) = sorted(gas_units.items(), key=lambda kv: kv[1])[:2]
-        raise ValueError(f"{name}: topic {chosen['gas']}: the readings change unit at {describe(t1)} (raw_units "
-                         f"{UNIT_NAMES.get(u0, u0)} from {describe(t0)}, then {UNIT_NAMES.get(u1, u1)})")
+        raise ValueError(f"{name}: topic {chosen['gas']}: the readings change unit at {describe(t1)}: raw_units "
+                         f"{UNIT_NAMES.get(u0, u0)} from {describe(t0)}, then {UNIT_NAMES.get(u1, u1)}")
     units = UNIT_NAMES.get(next(iter(gas_units)), f"raw_units {next(iter(gas_units))}") if gas_units else None
     gas_xy = _per_frame(tree, gas_t, [f for f, k in zip(gas_frames, keep) if k], map_frame)[:, :2]
     detections, skipped["detections"] = _detections(name, chosen["detections"], dets, tree, frame_of, map_frame,

@@ -203,3 +203,19 @@ def test_the_posterior_figure_is_labelled(tmp_path):
         assert labels == ["90 % credible region", "path (from its start)", "walls and furniture", "true source"]
     finally:
         plt.close(fig)
+
+
+def test_gas_readings_that_change_unit_are_refused(tmp_path, capsys):
+    import dataclasses
+
+    from tests.ros.bags import rewrite
+
+    bag = episode_bag(tmp_path / "bag")
+    start = 1_700_000_000 * 10**9
+    mixed = rewrite(bag, tmp_path / "mixed", change=lambda topic, t, m: dataclasses.replace(m, raw_units=4)
+                    if topic == "/gas" and t >= start + 5 * 10**9 else m)
+    assert cli.main(["replay", str(mixed), "--out", str(tmp_path / "o")]) == 2
+    line = _error_line(capsys)
+    assert "topic /gas: the readings change unit at t = 5.000 s into the bag" in line
+    assert "raw_units ppm from t = 0.000 s into the bag" in line
+    assert line.endswith("then ppb") and not (tmp_path / "o").exists()
