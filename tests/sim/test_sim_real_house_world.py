@@ -223,3 +223,40 @@ def test_a_source_on_furniture_says_so_and_what_to_do(tmp_path, capsys):
 
     path = write_real_world(tmp_path, map=str(SHARED / "_occupancy.yaml"), sources={"B2": near})
     assert load_world(path).sources["B2"] == tuple(near) or list(load_world(path).sources["B2"]) == near
+
+
+def _without_resolution(tmp_path):
+    path = write_real_world(tmp_path)
+    world = yaml.safe_load(path.read_text())
+    del world["resolution"]  # the map's own 1-cm cells
+    path.write_text(yaml.safe_dump(world, sort_keys=False))
+    return path
+
+
+def test_the_1cm_house_is_refused_by_the_runs_naming_resolution(tmp_path, capsys):
+    from psgsl_pgm.cli._main import main
+
+    path = _without_resolution(tmp_path)
+    out = tmp_path / "out"
+    assert main(["search", "--world", str(path), "--sources", "B1", "--seeds", "1", "--quiet", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "key 'resolution': 731,682 free cells of 0.01 m are more than the 60,000" in err[0]
+    assert "set 'resolution: 0.04' (or coarser)" in err[0] and not out.exists()
+
+
+@pytest.mark.slow
+def test_world_check_of_the_1cm_house_stays_within_2_gb(tmp_path):
+    """``world check`` at the lab's 1-cm cells runs (its found rule in bounded blocks), within 2 GB, and warns that
+    the runs need a coarser resolution (about 2 minutes on a 2-core machine)."""
+    import resource
+    import subprocess
+    import sys
+
+    path = _without_resolution(tmp_path)
+    repo = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-m", "psgsl_pgm", "world", "check", str(path)], cwd=repo,
+                          capture_output=True, text=True, env={**__import__("os").environ, "PYTHONPATH": str(repo)})
+    assert done.returncode == 0, done.stderr
+    assert "warning: 731,682 free cells: search, experiment, benchmark and replay refuse" in done.stdout
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024  # bytes (Linux reports KiB)
+    assert peak < 2 * 2**30, f"peak {peak / 2**30:.2f} GiB"
