@@ -193,7 +193,7 @@ def test_the_example_world_file_of_house_b_checks(tmp_path, capsys):
     from psgsl_pgm.cli._main import main
 
     example = Path(__file__).resolve().parents[2] / "examples" / "house_b"
-    assert sorted(p.name for p in example.iterdir()) == ["README.rst", "objects.yaml", "walls.yaml", "world.yaml"]
+    assert sorted(p.name for p in example.iterdir()) == ["ABOUT.md", "objects.yaml", "walls.yaml", "world.yaml"]
     for name in ("world.yaml", "walls.yaml"):
         text = (example / name).read_text()
         assert "../../../shared/data/mapir_house_B" in text
