@@ -65,8 +65,24 @@ def check_request(seed, n_rooms, area, room_types):
 
 
 def draw_house(seed: int, *, n_rooms=None, area=None, room_types=None, wind_speed=None) -> tuple:
-    """``(house, rooms, doors, windows, wind speed, start)`` of :func:`psgsl_pgm.sim.generate_house` (its
-    parameters and its one random generator, so the same seed draws the same house)."""
+    """The drawn parts of :func:`psgsl_pgm.sim.generate_house` (its parameters and its one random generator, so
+    the same seed draws the same house).
+
+    Returns
+    -------
+    house : House
+        Grid (windows open), room labels, objects, inlet and outlet.
+    rooms : tuple of (type, (x0, x1, y0, y1))
+        Each room's rectangle, m.
+    doors : tuple of (x0, x1, y0, y1)
+        Door openings, m.
+    windows : tuple of dict
+        As a world file declares them.
+    speed : float
+        Mean wind speed, m/s.
+    start : (2,) ndarray
+        The robot's start, m.
+    """
     n_rooms, area, room_types = check_request(seed, n_rooms, area, room_types)
     if wind_speed is not None:
         wind_speed = real_number(wind_speed, "wind_speed", unit="m/s")
