@@ -62,26 +62,23 @@ def test_world_check_warns_when_the_camera_has_no_objects_to_see(flat, capsys):
     assert "lists no objects" not in capsys.readouterr().out
 
 
-def test_too_many_free_cells_is_refused_naming_resolution(flat, tmp_path, capsys):
+def test_too_many_free_cells_is_refused_naming_resolution(flat, tmp_path, capsys, monkeypatch):
     """The flat at its map's 5-cm cells: 8 000 free cells; with a limit below that the runs refuse, world check
     warns."""
+    import functools
+
+    import psgsl_pgm.sim as sim
+
     path = _write(flat, resolution=0.05)
     spec = load_world(path)
     check_free_cells(spec)  # within the default limit
     with pytest.raises(ValueError, match=r"w\.yaml: key 'resolution': 8,\d{3} free cells of 0\.05 m are more than "
                                          r"the 1,000 .*set 'resolution: 0\.15' \(or coarser\)"):
         check_free_cells(spec, limit=1_000)
-    import psgsl_pgm.sim._worldfile as wf
-
-    monkey = pytest.MonkeyPatch()
-    try:
-        monkey.setattr(wf, "MAX_FREE_CELLS", 1_000)
-        monkey.setattr("psgsl_pgm.sim.MAX_FREE_CELLS", 1_000)
-        monkey.setattr(wf.check_free_cells, "__kwdefaults__", {"limit": 1_000})
-        assert main(["search", "--world", str(path), "--seeds", "1", "--quiet", "--out", str(tmp_path / "o")]) == 2
-        err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and "key 'resolution'" in err[0] and not (tmp_path / "o").exists()
-        assert main(["world", "check", str(path)]) == 0
-        assert "warning: 8," in capsys.readouterr().out
-    finally:
-        monkey.undo()
+    monkeypatch.setattr(sim, "check_free_cells", functools.partial(check_free_cells, limit=1_000))
+    monkeypatch.setattr(sim, "MAX_FREE_CELLS", 1_000)
+    assert main(["search", "--world", str(path), "--seeds", "1", "--quiet", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "key 'resolution'" in err[0] and not (tmp_path / "o").exists()
+    assert main(["world", "check", str(path)]) == 0
+    assert "warning: 8," in capsys.readouterr().out
