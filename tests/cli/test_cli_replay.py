@@ -219,3 +219,28 @@ def test_gas_readings_that_change_unit_are_refused(tmp_path, capsys):
     assert "topic /gas: the readings change unit at t = 5.000 s into the bag" in line
     assert "raw_units ppm from t = 0.000 s into the bag" in line
     assert line.endswith("then ppb") and not (tmp_path / "o").exists()
+
+
+def test_a_float_gas_topic_is_taken_as_ppm_and_the_replay_says_so(tmp_path, capsys):
+    """A std_msgs/Float64 carries no unit: its values are taken as ppm, and the printout says so."""
+    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+
+    from psgsl_pgm.ros._types import typestore
+
+    src = episode_bag(tmp_path / "bag")
+    store = typestore()
+    dst = tmp_path / "floats"
+    with Reader(src) as reader, Writer(dst, version=9, storage_plugin=StoragePlugin.SQLITE3) as writer:
+        conns = {}
+        for conn, t, raw in reader.messages():
+            topic, typ = conn.topic, conn.msgtype
+            msg = store.deserialize_cdr(raw, typ)
+            if topic == "/gas":  # the reading as a bare Float64 (received at its stamp)
+                topic, typ, msg = "/ppm", "std_msgs/msg/Float64", store.types["std_msgs/msg/Float64"](data=msg.raw)
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, typ, typestore=store)
+            writer.write(conns[topic], t, store.serialize_cdr(msg, typ))
+    assert cli.main(["replay", str(dst), "--quiet", "--out", str(tmp_path / "o")]) == 0
+    text = capsys.readouterr().out
+    assert "10 gas readings (5 hits at >= 1 ppm)" in text and "gas=/ppm" in text
+    assert "the gas topic's /ppm messages carry no unit: their values are taken as ppm" in text
