@@ -1,11 +1,11 @@
 """Declarations with an honest uncertainty: the credible region and the HPD level of the true source (defined
 with the validation experiment's metrics, :mod:`psgsl_pgm.experiment._metrics`, as is the Wilson interval of a
-success rate), and the house-clustered Wilson interval. Times to find are censored at the budget; their statistics are in :mod:`._survival`."""
+success rate), and the house-clustered Wilson interval. Times to find are censored at the budget; their
+statistics are in :mod:`._survival`."""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from ..experiment._metrics import _wilson, credible_region, hpd_level, mean_ci, wilson_interval
 

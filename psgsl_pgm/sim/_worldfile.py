@@ -566,9 +566,10 @@ def _check_rooms_kept(where: str, fine_labels, labels, names, fine_res: float, r
     areas = {n: float((fine_labels == i).sum()) * fine_res**2 for i, n in enumerate(names) if (fine_labels == i).any()}
     small = min(areas.values())
     side = max(fine_res, np.floor(np.sqrt(small) / 3 / fine_res) * fine_res)  # three cells across the smallest
+    side = float(np.format_float_positional(side, precision=6))
     raise ValueError(f"{where}: key 'resolution': cells of {res:g} m are coarser than the rooms: "
                      f"{', '.join(lost)} keep{'s' if len(lost) == 1 else ''} no cell (the smallest room has "
-                     f"{small:.2f} m²); use a resolution of at most {float(np.format_float_positional(side, precision=6)):g} m")
+                     f"{small:.2f} m²); use a resolution of at most {side:g} m")
 
 
 def _load_wind(wpath: Path, where: str, wind, probe: House, builtin: bool) -> dict:

@@ -1,8 +1,6 @@
 """Grid map frame conversions and the loaders (ROS maps, room maps, object lists): round trips, the real
 house of ../shared, and clear errors for bad files."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import yaml
