@@ -117,6 +117,10 @@ def _run(args) -> int:
     # before anything is written
     house_ids, seed_ids = benchmark_sample(args.split, houses=args.houses, seeds=args.seeds,
                                            first_house=args.first_house, world=args.world is not None)
+    if args.world is not None:
+        from ..sim import check_free_cells, load_world
+
+        check_free_cells(load_world(args.world))  # a map too fine for the runs' memory: one line naming 'resolution'
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
     what = args.world if args.world is not None else f"{len(house_ids)} generated homes"
     print(f"psgsl benchmark: {what} ({args.split} split), seeds {seed_ids.start}-{seed_ids.stop - 1}, policies "

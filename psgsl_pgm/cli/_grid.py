@@ -220,7 +220,7 @@ def world_sources(args):
 
     spec = None
     if args.world is not None:
-        from ..sim import load_world
+        from ..sim import check_free_cells, load_world
 
         spec = load_world(args.world)
     names = args.sources
@@ -228,6 +228,8 @@ def world_sources(args):
         names = list(spec.sources) if spec is not None else list(DEFAULT_SOURCES)
         if not names:
             raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+    if spec is not None:
+        check_free_cells(spec)  # a map too fine for the runs' memory: one line naming 'resolution', nothing run
     return spec, names, [parse_source(s) for s in names]
 
 

@@ -218,6 +218,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
                                      "Without a command: the demo.")
+    parser.add_argument("--quiet", dest="top_quiet", action="store_true",
+                        help="no progress bar (before a command: the same as that command's --quiet)")
     sub = parser.add_subparsers(dest="command")
 
     demo = sub.add_parser("demo", help="the validation experiment in small, then a small closed-loop "
@@ -280,8 +282,10 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)  # argparse prints usage + one line and exits 2 on bad syntax
     if args.command is None:
-        argv = ["demo"]
+        argv = ["demo"] + (["--quiet"] if args.top_quiet else [])
         args = parser.parse_args(argv)
+    elif args.top_quiet:
+        args.quiet = True  # psgsl --quiet COMMAND: the command's own --quiet
     args.argv = argv  # for the resume hint after Ctrl-C
     from ..runs._runner import command_label
 

@@ -248,9 +248,11 @@ class VariantPosteriors:
     def observe(self, stop, reading, wind, frames) -> None:
         """Assimilate one stop: the anemometer reading into the wind estimate (re-solving the plume on schedule),
         the gas reading into p(s | g), every frame — read with the robot's detector model — into both
-        class-belief maps."""
-        self.wind.add(stop, wind)
-        self._refresh_wind()
+        class-belief maps. ``wind`` None (a robot without an anemometer): the wind estimate keeps what it had (the
+        still-air plume without any reading) and the estimator gets no wind."""
+        if wind is not None:
+            self.wind.add(stop, wind)
+            self._refresh_wind()
         self.estimator.update(stop, reading.hit, wind)
         for frame in frames if self.maps else ():
             if self.detector_model is not None:  # the labels read with the robot's model of its detector

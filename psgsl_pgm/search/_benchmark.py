@@ -233,9 +233,9 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     if unknown:
         raise ValueError(f"house_options may hold n_rooms, area and room_types, got {unknown}")
     if world is None:
-        from ..sim._generate import _check_request
+        from ..sim._generate import check_request
 
-        n, a, t = _check_request(house_range.start, options.get("n_rooms"), options.get("area"),
+        n, a, t = check_request(house_range.start, options.get("n_rooms"), options.get("area"),
                                  options.get("room_types"))
         options = {k: v for k, v in (("n_rooms", n), ("area", a), ("room_types", t)) if v is not None}
         if len(house_range) < 1:

@@ -50,7 +50,8 @@ from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
 from ._world_model import WORLD_COMPONENTS, WORLD_MODELS, WorldModel
-from ._worldfile import WorldSpec, default_world, load_world, navigable
+from ._worldfile import (MAX_FREE_CELLS, MAX_WIND_SPEED, WorldSpec, check_free_cells, default_world, load_world,
+                         navigable)
 
 __all__ = [
     "AREA_RANGE",
@@ -89,6 +90,9 @@ __all__ = [
     "World",
     "WorldModel",
     "WorldSpec",
+    "MAX_FREE_CELLS",
+    "MAX_WIND_SPEED",
+    "check_free_cells",
     "box_footprint",
     "cfd_wind",
     "cells_clear",
