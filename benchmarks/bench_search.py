@@ -222,7 +222,7 @@ def _space_aware_homes(a):
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors, visit
     from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, _space, run_closed_loop
-    from psgsl_pgm.search._policies import choose
+    from psgsl_pgm.search._choose import choose
     from psgsl_pgm.sim import default_world
     from psgsl_pgm.sim._generate import generate_house
 

@@ -44,7 +44,8 @@ from ..sim import Camera, DetectorModel, GasSensor, default_world, load_world
 from ._declare import propose_declaration
 from ._detection import DetectionModel
 from ._loop import SearchConfig
-from ._policies import POLICIES, Situation, check_semantics_alone, choose
+from ._choose import choose
+from ._policies import POLICIES, Situation, check_semantics_alone
 from ._space import FreeSpace
 
 __all__ = ["DEFAULT_TOPICS", "LiveSession", "LiveStep", "live_subscriptions", "run_live", "write_live"]

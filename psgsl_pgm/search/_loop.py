@@ -56,7 +56,8 @@ from ..experiment._tour import exploration_tour
 from ._declare import declaration_error, propose_declaration
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
-from ._policies import POLICIES, Situation, check_score, check_semantics_alone, choose
+from ._choose import choose
+from ._policies import POLICIES, Situation, check_score, check_semantics_alone
 from ._space import FreeSpace
 
 __all__ = ["ENDS", "SearchConfig", "SearchRun", "run_closed_loop"]
