@@ -194,7 +194,6 @@ STRENGTH_EDGES = (0.0, 0.5, 0.6, 0.7, 0.85, 1.0, 1.3, 2.0, np.inf)
 GAS_EXPOSURES = 40_000
 
 
-@lru_cache(maxsize=8)
 def robot_gas_confusion(gases, *, exposures: int = GAS_EXPOSURES, seed: int = 0, pseudo_count: float = 1.0):
     """The robot's confusion p(ζ | γ, strength bin) of its electronic nose, counted on reference exposures.
 
@@ -227,9 +226,16 @@ def robot_gas_confusion(gases, *, exposures: int = GAS_EXPOSURES, seed: int = 0,
     >>> conf.shape, bool(conf[-1, 0, 0] > conf[1, 0, 0])     # strong readings are named right more often
     ((8, 2, 2), True)
     """
+    if isinstance(gases, str):
+        raise TypeError(f"gases must be a sequence of gas names, got the string {gases!r}")
+    conf, edges = _counted_confusion(tuple(str(g) for g in gases), int(exposures), int(seed), float(pseudo_count))
+    return conf.copy(), edges.copy()
+
+
+@lru_cache(maxsize=8)
+def _counted_confusion(gases: tuple, exposures: int, seed: int, pseudo_count: float):
     from ..sim import ElectronicNose
 
-    gases = tuple(str(g) for g in gases)
     nose = ElectronicNose()
     missing = [g for g in gases if g not in nose.gases]
     if not gases or missing:
