@@ -76,3 +76,15 @@ def test_a_gas_the_ontology_lacks_is_refused():
     *_, world = start_run("oven", 0, "infotaxis", ExperimentConfig(warm_up=0.0))
     with pytest.raises(ValueError, match="gas must be one of the ontology's gases .* or 'unknown'"):
         VariantPosteriors(world, "infotaxis", ExperimentConfig(gas="chlorine"))
+
+
+def test_the_fixed_tour_with_the_gas_unknown_changes_only_the_semantic_variants():
+    """The e-nose draws from its own stream: p(s | g) (variant olfaction) is the told run's, bit for bit; the
+    semantic variants use the mixture and differ."""
+    from psgsl_pgm.experiment import run_search
+
+    unknown = run_search("oven", 2, config=ExperimentConfig(gas="unknown", stops=4))
+    told = run_search("oven", 2, config=ExperimentConfig(gas=draw_gas(house_ontology().gases, 2), stops=4))
+    np.testing.assert_array_equal(unknown.error[:, 0], told.error[:, 0])
+    np.testing.assert_array_equal(unknown.hit, told.hit)
+    assert not np.array_equal(unknown.error[:, 2], told.error[:, 2])
