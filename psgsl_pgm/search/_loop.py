@@ -270,14 +270,18 @@ class SearchRun:
 
     @property
     def gas_identified(self) -> bool:
-        """Whether the most probable gas at the run's end is the true one (False when the gas was told)."""
+        """Whether the most probable gas at the run's end is the true one, alone (a tie — e.g. the uniform prior of a
+        run that ended before any classified reading — is not an identification); False when the gas was told."""
         if not self.gas_unknown:
             return False
-        return self.gas_names[int(np.argmax(self.gas_probs[-1]))] == self.gas
+        p = self.gas_probs[-1]
+        i = self.gas_names.index(self.gas)
+        return bool(p[i] > np.max(np.delete(p, i), initial=-np.inf))
 
     def time_to_gas(self, level: float = 0.9) -> tuple[float, bool]:
-        """(s until p(true γ | ζ_1:t) first reached ``level``, whether it did): the first stop's time, or the
-        time budget without one (censored). A run whose gas was told has no such time: ValueError."""
+        """(s until p(true γ | ζ_1:t) first reached ``level``, whether it did): the first such stop's time, or the
+        time budget without one — also for a run that ended (declared) before: it never names the gas (censored
+        at the budget). A run whose gas was told has no such time: ValueError."""
         if not self.gas_unknown:
             raise ValueError("time_to_gas needs a run whose gas the robot was not told (gas: unknown)")
         p_true = self.gas_probs[:, self.gas_names.index(self.gas)]

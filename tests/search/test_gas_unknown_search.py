@@ -47,6 +47,13 @@ def test_summary_gains_gas_identified_and_time_to_gas(unknown_run):
     assert tg["value"] == pytest.approx((t + 100.0) / 2)               # RMST of one event and one censored run
 
 
+def test_a_tie_is_no_identification(unknown_run):
+    """A run that ended before any classified reading keeps the uniform prior: no gas is identified, even the
+    first, and its time to the gas is censored at the budget."""
+    early = replace(unknown_run, gas="smoke", time=unknown_run.time[:1], gas_probs=unknown_run.gas_probs[:1])
+    assert not early.gas_identified and early.time_to_gas() == (100.0, False)
+
+
 def test_a_told_run_has_no_gas_fields(tmp_path):
     run = run_closed_loop("oven", 3, "greedy", "olfaction", search=SearchConfig(time_budget=5.0))
     assert not run.gas_unknown and run.gas == "" and run.gas_probs.shape == (0, 0)
