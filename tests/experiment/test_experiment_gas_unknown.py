@@ -88,3 +88,11 @@ def test_the_fixed_tour_with_the_gas_unknown_changes_only_the_semantic_variants(
     np.testing.assert_array_equal(unknown.error[:, 0], told.error[:, 0])
     np.testing.assert_array_equal(unknown.hit, told.hit)
     assert not np.array_equal(unknown.error[:, 2], told.error[:, 2])
+
+
+def test_a_run_with_the_gas_unknown_is_not_recorded():
+    from psgsl_pgm.experiment._record import EpisodeRecorder
+
+    *_, world = start_run("oven", 0, "infotaxis", ExperimentConfig(gas="unknown", warm_up=0.0))
+    with pytest.raises(ValueError, match="--record cannot record a run whose gas is unknown"):
+        EpisodeRecorder().watch(world)
