@@ -26,6 +26,7 @@ Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian net
 from .core._beliefs import room_evidence, update_class_probs
 from .core._class_beliefs import ClassBeliefMap
 from .core._fusion import fuse
+from .core._gas_belief import GasBelief
 from .core._infogain import semantic_information_gain
 from .core._kitchen import kitchen_example, kitchen_ontology
 from .core._ontology import Ontology
@@ -74,6 +75,7 @@ def load_world(path):
 
 __all__ = [
     "ClassBeliefMap",
+    "GasBelief",
     "GridMap",
     "Ontology",
     "ViewCache",

@@ -20,6 +20,8 @@ from pathlib import Path
 from . import _benchmark, _export, _live, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
+    add_gas_argument,
+    gas_setting,
     add_missed_hits_argument,
     missed_hit_rate,
     add_ontology_argument,
@@ -99,7 +101,7 @@ def _experiment(args) -> int:
 
     seeds = split_seeds(args)  # a bad --first-seed or a test split with one: one line, exit 2, nothing written
     spec, names, sources = world_sources(args)
-    gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
+    gas = gas_setting(args, spec)  # --gas, else the world file's; a gas the ontology lacks: exit 2
     config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology,
                               missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
                               world_model=world_model(args.world_model), **gas)
@@ -239,6 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_ontology_argument(exp)
     add_missed_hits_argument(exp)
     add_world_model_argument(exp)
+    add_gas_argument(exp)
     add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)

@@ -10,13 +10,15 @@ from .._shared._validate import positive, real_pair
 from ..olfaction._infotaxis import _parameter_grid
 from ..runs._key import OMIT_DEFAULT
 
-__all__ = ["ESTIMATORS", "ExperimentConfig", "PARAMETER_GRID", "VARIANTS", "parse_source"]
+__all__ = ["ESTIMATORS", "ExperimentConfig", "PARAMETER_GRID", "UNKNOWN_GAS", "VARIANTS", "parse_source"]
 
 #: The three variants of the paper's Fig. error-chart, in the order they are reported.
 VARIANTS = ("olfaction", "semantics", "semantics+rooms")
 
 #: Olfactory estimators p(s | g) the experiment can run.
 ESTIMATORS = ("infotaxis", "pmfs", "particle-filter")
+#: The ``gas`` of a run whose gas the robot is not told (:class:`ExperimentConfig`).
+UNKNOWN_GAS = "unknown"
 
 #: (D m²/s, τ s, κ m²/s, weight) of the plume parameters marginalised by the grid Infotaxis estimator
 #: (:attr:`ExperimentConfig.parameter_grid`), fitted by :func:`psgsl_pgm.experiment.calibrate`.
@@ -37,6 +39,9 @@ class ExperimentConfig:
     ----------
     gas : str
         Target gas γ (a gas of :func:`house_ontology`); its source likelihood p(o | s, γ) drives the semantic term.
+        ``"unknown"`` (:data:`UNKNOWN_GAS`): the episode's gas is drawn from the ontology's gases and not told to
+        the robot, which infers it from its electronic nose and uses the gas mixture of the semantic term
+        (:class:`psgsl_pgm.experiment.VariantPosteriors`).
     warm_up : float
         Seconds of release before the robot starts (the plume develops).
     speed : float

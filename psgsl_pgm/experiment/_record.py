@@ -72,7 +72,7 @@ class EpisodeRecorder:
         Only a world with the thresholded :class:`psgsl_pgm.sim.GasSensor` can be recorded: the bag holds one value
         per reading and ``psgsl replay`` thresholds it; a sensor whose hits the robot decides from the window's
         samples (:class:`psgsl_pgm.sim.MOXSensor`, :class:`psgsl_pgm.sim.PIDSensor`) is a ValueError before
-        anything is written.
+        anything is written. So is a world with an electronic nose (a run whose gas the robot is not told).
         """
         from ..sim import GasSensor
 
@@ -81,6 +81,9 @@ class EpisodeRecorder:
             raise ValueError(f"--record needs the world's thresholded GasSensor, got a {kind} "
                              "(its hits are decided by the robot from each reading's samples, which a bag does not "
                              "hold)")
+        if getattr(world, "enose", None) is not None:  # a bag has no message for the e-nose's classifications
+            raise ValueError("--record cannot record a run whose gas is unknown to the robot: a bag holds no "
+                             "electronic-nose readings, and its replay would not infer the gas")
         self._world = world
         self._t0 = world.time
         return _Watched(world, self)

@@ -222,6 +222,12 @@ class SearchRun:
         Whether the declaration lies within ``success_radius`` of the source.
     declared_mass : float
         The posterior mass M that backed the declaration (:mod:`psgsl_pgm.search._declare`); NaN without one.
+    gas : str
+        The episode's true gas when the robot was not told it (``gas: unknown``); "" otherwise.
+    gas_names : tuple of str
+        The gases of the robot's belief p(γ | ζ_1:t), in the order of ``gas_probs``'s columns; () when told.
+    gas_probs : (n + 1, m) ndarray
+        p(γ | ζ_1:t) at each stop (step 0: the uniform prior); (0, 0) when the gas was told.
     """
 
     source: str
@@ -254,6 +260,37 @@ class SearchRun:
     declared_error: float = float("nan")
     declared_correct: bool = False
     declared_mass: float = float("nan")
+    gas: str = ""
+    gas_names: tuple = ()
+    gas_probs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    @property
+    def gas_unknown(self) -> bool:
+        """Whether the robot searched without being told the gas."""
+        return bool(self.gas_names)
+
+    @property
+    def gas_identified(self) -> bool:
+        """Whether the most probable gas at the run's end is the true one, alone (a tie — e.g. the uniform prior of a
+        run that ended before any classified reading — is not an identification); False when the gas was told."""
+        if not self.gas_unknown:
+            return False
+        p = self.gas_probs[-1]
+        i = self.gas_names.index(self.gas)
+        return bool(p[i] > np.max(np.delete(p, i), initial=-np.inf))
+
+    def time_to_gas(self, level: float = 0.9) -> tuple[float, bool]:
+        """(s until p(true γ | ζ_1:t) first reached ``level``, whether it did): the first such stop's time, or the
+        time budget without one — also for a run that ended (declared) before: it never names the gas (censored
+        at the budget). A run whose gas was told has no such time: ValueError."""
+        if not self.gas_unknown:
+            raise ValueError("time_to_gas needs a run whose gas the robot was not told (gas: unknown)")
+        p_true = self.gas_probs[:, self.gas_names.index(self.gas)]
+        reached = np.flatnonzero(p_true >= level)
+        budget = float(self.config["search"]["time_budget"])
+        if reached.size == 0 or self.time[reached[0]] > budget:
+            return budget, False
+        return float(self.time[reached[0]]), True
 
     @property
     def n_steps(self) -> int:
@@ -308,7 +345,7 @@ def _tour_plan(tour):
 def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", variant: str = "semantics+rooms",
                     estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
                     search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
-                    world_spec=None, recorder=None) -> SearchRun:
+                    world_spec=None, recorder=None, gas_type: str | None = None) -> SearchRun:
     """Run one closed-loop search in the simulated house: the robot senses, updates its beliefs, chooses its next
     stop, and declares the source (module docstring).
 
@@ -347,6 +384,11 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     recorder : psgsl_pgm.experiment._record.EpisodeRecorder, optional, keyword-only
         Logs the readings, frames, every variant's posterior and each chosen pose (``--record``); the run itself
         is unchanged.
+    gas_type : str, optional, keyword-only
+        With ``config.gas == "unknown"``: the episode's true gas (default: drawn with ``seed``,
+        :func:`psgsl_pgm.experiment._step.start_run`). The robot is not told it: it infers p(γ | ζ_1:t) from its
+        electronic nose at every stop, and its semantic term, φ_O and P_f use the gas mixture
+        Σ_γ p(γ | ζ) p(s | z, γ).
 
     Returns
     -------
@@ -378,7 +420,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     check_semantics_alone(policy, variant)
-    config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
+    config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec,
+                                             gas_type=gas_type)
     if recorder is not None:
         world = recorder.watch(world)
     house = world.house
@@ -431,6 +474,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
 
     rec = {k: [] for k in ("time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
                            "region_area", "region_hit", "hpd_level")}
+    gas_trace = []  # p(γ | ζ_1:t) per stop, when the gas is unknown
     cell_area = house.grid.resolution**2
     truth_cell = space.cell_of(truth)
     t0 = world.time
@@ -451,6 +495,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         rec["region_area"].append(float(region.sum()) * cell_area)
         rec["region_hit"].append(bool(region.ravel()[truth_cell]))
         rec["hpd_level"].append(hpd_level(post, truth_cell))
+        if beliefs.gas_belief is not None:
+            gas_trace.append(beliefs.gas_probs)
         if recorder is not None:
             recorder.step(beliefs.posteriors((variant,)), beliefs)
         return post
@@ -528,6 +574,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                 beliefs.condition(found_ll)
         else:
             beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
+        if beliefs.gas_belief is not None:  # the e-nose names the gas of the same window
+            beliefs.observe_smell(world.sniff())
         beliefs.observe(stop, reading, wind, frames)
         length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
         path_pts.extend(seg[1:])
@@ -542,10 +590,13 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
     arrays = {k: np.array(v) for k, v in rec.items()}
     decl = {}
+    if beliefs.gas_belief is not None:
+        decl = {"gas": str(world.gas_type), "gas_names": tuple(beliefs.gas_belief.gases),
+                "gas_probs": np.array(gas_trace)}
     if declared is not None:
         proposal, t_dec = declared
         err = declaration_error(proposal.xy, truth, truth_region)
-        decl = {"declared": True, "declared_xy": proposal.xy, "time_to_declare": float(t_dec),
+        decl |= {"declared": True, "declared_xy": proposal.xy, "time_to_declare": float(t_dec),
                 "declared_error": err, "declared_correct": bool(err <= search.success_radius),
                 "declared_mass": float(proposal.mass)}
     return SearchRun(label, int(seed), policy, variant, estimator, truth, bool(found),

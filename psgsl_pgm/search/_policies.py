@@ -412,8 +412,9 @@ def _semantic_gain(sit: Situation):
     if sit.variant == "olfaction":
         return None
     b = sit.beliefs
-    return semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,
-                                     olfactory=b.estimator.posterior, predictive="exact").ravel()
+    return semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,  # the gas mixture when
+                                     olfactory=b.estimator.posterior, predictive="exact",   # the gas is unknown
+                                     gas_probs=getattr(b, "gas_probs", None)).ravel()
 
 
 def _view_information(sit: Situation, cells, gain=None) -> np.ndarray:

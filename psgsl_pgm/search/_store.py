@@ -20,6 +20,8 @@ _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "er
 #: The declaration's scalars (:class:`SearchRun`), written by every run and absent from runs stored before
 #: declarations (read as "no declaration": those runs ended with ``end="reach"``).
 _DECLARATION = ("declared", "declared_xy", "time_to_declare", "declared_error", "declared_correct", "declared_mass")
+#: The gas belief of a run whose gas the robot was not told (:class:`SearchRun`); written by those runs only.
+_GAS = ("gas", "gas_names", "gas_probs")
 
 
 def search_run_path(directory, source, policy: str, variant: str, estimator: str, seed: int) -> Path:
@@ -34,7 +36,8 @@ def write_search_run(run: SearchRun, fh) -> None:
         variant=np.array(run.variant), estimator=np.array(run.estimator), found=np.array(run.found),
         time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
         config=np.array(json.dumps(run.config, sort_keys=True)), **{k: getattr(run, k) for k in _ARRAYS},
-        **{k: np.asarray(getattr(run, k)) for k in _DECLARATION})
+        **{k: np.asarray(getattr(run, k)) for k in _DECLARATION},
+        **({k: np.asarray(getattr(run, k)) for k in _GAS} if run.gas_unknown else {}))
 
 
 def save_search_run(run: SearchRun, path) -> Path:
@@ -54,6 +57,9 @@ def load_search_run(path) -> SearchRun:
                 arrays |= {k: z[k] for k in _DECLARATION}
                 arrays |= {k: bool(arrays[k]) for k in ("declared", "declared_correct")}
                 arrays |= {k: float(arrays[k]) for k in ("time_to_declare", "declared_error", "declared_mass")}
+            if "gas_probs" in names:  # a run whose gas the robot was not told
+                arrays |= {"gas": str(z["gas"]), "gas_names": tuple(str(g) for g in z["gas_names"]),
+                           "gas_probs": z["gas_probs"]}
             return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
                              str(z["estimator"]), arrays.pop("source_xy"), bool(z["found"]),
                              float(z["time_to_find"]), float(z["geodesic"]), float(z["driven"]),

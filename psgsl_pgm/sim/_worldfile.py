@@ -9,7 +9,8 @@ A world file names the files a GSL lab already has; relative paths resolve again
     objects: objects.yaml        # optional: object list (psgsl_pgm.sim.load_objects)
     ontology: ontology.yaml      # this project's format or the lab's (top-level Gases)
     room_classes: ObjectProbByRoom.yaml   # optional: the lab's p(o | room)
-    gas: smoke                   # optional: target gas (default: the experiment's, else the ontology's first)
+    gas: smoke                   # optional: target gas (default: the experiment's, else the ontology's first);
+                                 # 'unknown': each episode's gas is drawn from the ontology's, not told to the robot
     model: realistic             # optional: the world model, ideal (default) or realistic, or ideal+COMPONENT...
                                  # (psgsl_pgm.sim.WorldModel: CFD wind, MOX sensor, occluding camera, pose error)
     source_region: rooms         # where a source may be: rooms (default), free, or a mask image (white = may)
@@ -102,7 +103,8 @@ class WorldSpec:
         The world file.
     ontology : psgsl_pgm.Ontology
     gas : str or None
-        Target gas named by the file.
+        Target gas named by the file; ``"unknown"``: each episode's gas is drawn from the ontology's gases and the
+        robot is not told it (it carries an electronic nose, :class:`psgsl_pgm.sim.ElectronicNose`).
     wind : dict
         ``{"kind": "potential", "speed", "perturbation"}`` or ``{"kind": "gaden", "sequence": WindSequence}``.
     start : (2,) ndarray or None
@@ -437,8 +439,9 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
         except (ValueError, TypeError, FileNotFoundError) as exc:
             raise _inner(where, "ontology" if rpath is None else "ontology/room_classes", exc) from None
     gas = data.get("gas")
-    if gas is not None and gas not in ontology.gases:
-        raise ValueError(f"{where}: key 'gas': {gas!r} is not a gas of the ontology {list(ontology.gases)}")
+    if gas is not None and gas not in ontology.gases and gas != "unknown":
+        raise ValueError(f"{where}: key 'gas': {gas!r} is not a gas of the ontology {list(ontology.gases)} nor "
+                         "'unknown'")
 
     # the house
     house, object_classes, map_path = None, (), None

@@ -138,7 +138,7 @@ def test_run_search_rejects_bad_arguments():
     with pytest.raises(ValueError, match="source class 'piano' has no object"):
         run_search("piano", 0)
     with pytest.raises(ValueError, match="gas must be one of"):
-        run_search("oven", 0, config=ExperimentConfig(gas="ammonia"), tour=None)
+        run_search("oven", 0, config=ExperimentConfig(gas="chlorine"), tour=None)
     with pytest.raises(ValueError, match="snapshot_at must hold fractions"):
         run_search("oven", 0, snapshot_at=(1.5,))
     with pytest.raises(ValueError, match="speed must be a positive finite number, got 0.0"):
