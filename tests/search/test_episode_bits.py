@@ -81,12 +81,12 @@ def test_seeded_episodes_are_the_recorded_ones_bit_for_bit(case):
 def test_branch_and_bound_picks_the_exhaustive_arg_max_along_an_episode(monkeypatch):
     """At every decision of a seeded episode (both semantic and olfaction-only beliefs): the same cell, heading,
     path and score as scoring every candidate with infotaxis_gain, and every bound above its value."""
-    from psgsl_pgm.search import _loop, _policies
+    from psgsl_pgm.search import _choose, _loop, _policies
 
     checked = []
 
     def exhaustive_too(policy, sit):
-        dec = _policies.choose(policy, sit)
+        dec = _choose.choose(policy, sit)
         cells, drive, pred, tau = _policies._candidates(sit)
         ref = _policies._best(_policies._score(sit, _policies.infotaxis_gain(sit, cells), tau), cells, pred, drive,
                               sit)
