@@ -49,15 +49,10 @@ from dataclasses import asdict, dataclass, field, fields
 import numpy as np
 
 from .._shared._validate import index, one_of, positive, real_pair, unit_interval
-from ..experiment._config import VARIANTS, ExperimentConfig
-from ..experiment._metrics import _error_and_spread
-from ..experiment._step import VariantPosteriors, robot_hit_rule, start_run, visit
-from ..experiment._tour import exploration_tour
-from ._declare import declaration_error, propose_declaration
-from ._detection import DetectionModel
-from ._metrics import credible_region, hpd_level
-from ._policies import POLICIES, Situation, check_score, check_semantics_alone, choose
+from ..experiment._config import ExperimentConfig
+from ._policies import check_score
 from ._space import FreeSpace
+from ._stepper import ClosedLoopEpisode
 
 __all__ = ["ENDS", "SearchConfig", "SearchRun", "run_closed_loop"]
 
@@ -288,22 +283,6 @@ class SearchRun:
         return float(self.driven / self.geodesic) if self.geodesic > 0 else float("nan")
 
 
-def _tour_plan(tour):
-    """Tour stops back and forth for ever: yields (stop, headings)."""
-    order = list(range(len(tour)))
-    forward = True
-    j = 0
-    while True:
-        seq = order[1:] if j == 0 else (order[::-1][1:] if not forward else order[1:])
-        for k in seq:
-            hs = tour.headings[k]
-            if not forward and len(hs) == 1:
-                hs = hs + np.pi  # travel direction, reversed
-            yield tour.stops[k], tuple(float(h) for h in hs)
-        forward = not forward
-        j += 1
-
-
 def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", variant: str = "semantics+rooms",
                     estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
                     search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
@@ -340,189 +319,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     SearchRun
     """
 
-    search = SearchConfig() if search is None else search
-    if not isinstance(search, SearchConfig):
-        raise TypeError(f"search must be a SearchConfig, got {type(search).__name__}")
-    if policy not in POLICIES:
-        raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
-    if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
-    check_semantics_alone(policy, variant)
-    config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
-    if recorder is not None:
-        world = recorder.watch(world)
-    house = world.house
-    # a world file's start (its own default when it names none: the navigable cell nearest the map's centre, as
-    # `world check` measures from); the embedded house: the search settings' start
-    start_xy = search.start if world_spec is None else tuple(float(v) for v in setting.start_for(house))
-    if space is None:
-        space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
-                          n_headings=search.n_headings)
-    beliefs = VariantPosteriors(world, estimator, config, setting=setting, variants=(variant,), seed=int(seed))
-    hits = robot_hit_rule(world.gas_sensor)  # the robot's hit decision for its kind of sensor
-    tour = exploration_tour(house, start=start_xy, clearance=search.clearance)
-    plan = _tour_plan(tour) if policy == "tour" else None
-    centres = house.grid.cell_centres().reshape(-1, 2)
-    truth = world.source
-    r = search.found_radius
-    sense_time = world.gas_sensor.window
-    budget = search.time_budget
-    declaring = search.end == "declare"
-    if search.miss_probability is not None:
-        robot_m = search.miss_probability
-    elif declaring:  # the robot's estimate, counted on reference passes of its detector
-        from ..experiment._robot_models import robot_source_miss_probability
-
-        robot_m = robot_source_miss_probability(config.world_model or "ideal")
-    else:
-        robot_m = 0.0
-    detection = DetectionModel.from_house(house, r, miss_probability=robot_m)
-    truth_hypothesis = detection.source_cell(truth, world.source_object, house)
-    truth_region = (detection.centres[detection.region_mask(truth_hypothesis).ravel()]
-                    if world.source_object is not None else None)  # the scoring's footprint of an object source
-    space.cover(detection)  # stops that can find every findable source (FreeSpace.cover)
-    start_cell = space.snap(start_xy)
-    # the robot searches for a source it can find: p(s) ∝ p(s) [s findable] (FreeSpace.findable)
-    beliefs.condition(np.where(space.findable(detection, start_cell), 0.0, -np.inf))
-    # end="reach": the detector's misses drawn as runs stored before declarations drew them
-    misses = (np.random.default_rng([int(seed), 0x5EA2C4]) if not declaring and robot_m > 0 else None)
-
-    def near(points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
-        return detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), truth_hypothesis)
-
-    def found_on(seg) -> np.ndarray:  # the success rule where the robot truly is as it passes seg's points
-        arcs = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(seg, axis=0), axis=1))])
-        return near(world.true_positions(seg, times=world.time + arcs / config.speed))
-
-    # geodesic distance from the start to where the source counts as found
-    d_start = space.distances(start_cell)
-    reachable = space.nav.ravel() & near(space.centres)
-    geodesic = float(d_start[reachable].min()) if reachable.any() else float("inf")
-
-    rec = {k: [] for k in ("time", "position", "heading", "hit", "path_length", "error", "map_error", "spread",
-                           "region_area", "region_hit", "hpd_level")}
-    cell_area = house.grid.resolution**2
-    truth_cell = space.cell_of(truth)
-    t0 = world.time
-
-    def record(pos, heading, hit, length):
-        post = beliefs.posteriors((variant,))[0]
-        err, spr = _error_and_spread(post.reshape(1, -1), centres, truth)  # metrics of a valid posterior
-        best = int(np.argmax(post))
-        region = credible_region(post, search.credible)
-        rec["time"].append(world.time - t0)
-        rec["position"].append(np.asarray(pos, dtype=np.float64))
-        rec["heading"].append(float(heading))
-        rec["hit"].append(bool(hit))
-        rec["path_length"].append(float(length))
-        rec["error"].append(float(err[0]))
-        rec["map_error"].append(float(np.linalg.norm(space.centres[best] - truth)))
-        rec["spread"].append(float(spr[0]))
-        rec["region_area"].append(float(region.sum()) * cell_area)
-        rec["region_hit"].append(bool(region.ravel()[truth_cell]))
-        rec["hpd_level"].append(hpd_level(post, truth_cell))
-        if recorder is not None:
-            recorder.step(beliefs.posteriors((variant,)), beliefs)
-        return post
-
-    def arc_to(seg, k) -> float:
-        return float(np.sum(np.linalg.norm(np.diff(seg[: k + 1], axis=0), axis=1))) if k else 0.0
-
-    start = space.position(start_cell)
-    path_pts = [start]
-    length = 0.0
-    found, t_found = False, 0.0  # a start within reach is found at t = 0 by the first stop's check
-    declared = None  # (Declaration, time)
-    post = record(start, tour.headings[0][-1], False, 0.0)
-    headings = tuple(float(h) for h in tour.headings[0])
-    cell, heading = start_cell, headings[-1]
-    first = True
-    cache: dict = {}  # static per-cell rows of the decisions (hit model), for this run's estimator
-    while not (found and not declaring) and declared is None and world.time - t0 < budget:
-        if first:  # the common first stop: the tour's look-around at the start
-            stop, drive, turn, seg = start, 0.0, 0.0, start[None]
-            first = False
-        elif plan is not None:
-            stop, headings = next(plan)
-            prev = path_pts[-1]
-            drive = float(np.linalg.norm(stop - prev))
-            n_pts = max(2, int(np.ceil(drive / house.grid.resolution)) + 1)
-            seg = prev[None] + np.linspace(0, 1, n_pts)[:, None] * (stop - prev)[None]
-            seg[-1] = stop  # exactly the stop, so that the next drive is the tour's own distance
-            turn = 0.0  # the tour turns between its own headings (visit), as in the experiment
-        else:
-            sit = Situation(post, beliefs, variant, space, cell, heading, config.speed, config.turn_time,
-                            sense_time, search.horizon, r, cache, search.score, detection, search.far_spacing)
-            dec = choose(policy, sit)
-            cells = dec.path
-            seg = space.position(cells)
-            stop, drive, headings = seg[-1], dec.drive, dec.headings
-            turn = config.turn_time * abs(float(np.angle(np.exp(1j * (headings[0] - heading))))) / (np.pi / 2)
-            cell = dec.cell
-        if recorder is not None:
-            recorder.choose((stop[0], stop[1], headings[0]))
-        # within reach of the source on the way?
-        hits_on_path = found_on(seg)
-        detected = False
-        if not declaring:  # end="reach": the first detected pass ends the run
-            if hits_on_path.any() and (misses is None or misses.random() >= robot_m):
-                k = int(np.argmax(hits_on_path))
-                arc = arc_to(seg, k)
-                t = world.time - t0 + arc / config.speed
-                if t <= budget:
-                    found, t_found = True, t
-                    length += arc
-                    path_pts.extend(seg[1 : k + 1])
-                    world.advance(arc / config.speed)
-                    break
-        elif hits_on_path.any():
-            k = int(np.argmax(hits_on_path))
-            if not found:  # the first pass within reach (a secondary time; it does not end the run)
-                t = world.time - t0 + arc_to(seg, k) / config.speed
-                if t <= budget:
-                    found, t_found = True, t
-            if world.detect_source(True):  # the detector fires at the first point within reach: the robot stops there
-                detected = True
-                seg = seg[: k + 1]
-                drive = arc_to(seg, k) if len(seg) > 1 else 0.0
-                stop = seg[-1]
-                if plan is None:
-                    cell = space.snap(stop)
-        reading, wind, frames = visit(world, stop, headings, config, drive=drive, turn=turn,
-                                      camera=not beliefs.mapped, hits=hits)
-        if detected:  # found here: the hypotheses found first from the detection's point
-            found_ll = detection.found_log_likelihood(seg)
-            if not np.any(post.ravel()[np.isfinite(found_ll)] > 0):  # the belief cannot explain it (pose error):
-                found_ll = detection.found_log_likelihood(seg[-1:])   # found from the point, first or not
-            if np.any(post.ravel()[np.isfinite(found_ll)] > 0):  # else the robot's model has no such hypothesis
-                beliefs.condition(found_ll)
-        else:
-            beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
-        beliefs.observe(stop, reading, wind, frames)
-        length += float(np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))) if len(seg) > 1 else 0.0
-        path_pts.extend(seg[1:])
-        heading = headings[-1]
-        if plan is not None:
-            cell = space.snap(stop)
-        post = record(stop, heading, reading.hit, length)
-        if declaring and world.time - t0 <= budget:
-            proposal = propose_declaration(post, detection, radius=search.declare_radius)
-            if proposal.mass >= search.declare_mass:  # the rule (module _declare): M >= κ
-                declared = (proposal, world.time - t0)
-    label = spec if isinstance(spec, str) else f"{spec[0]:g},{spec[1]:g}"
-    arrays = {k: np.array(v) for k, v in rec.items()}
-    decl = {}
-    if declared is not None:
-        proposal, t_dec = declared
-        err = declaration_error(proposal.xy, truth, truth_region)
-        decl = {"declared": True, "declared_xy": proposal.xy, "time_to_declare": float(t_dec),
-                "declared_error": err, "declared_correct": bool(err <= search.success_radius),
-                "declared_mass": float(proposal.mass)}
-    return SearchRun(label, int(seed), policy, variant, estimator, truth, bool(found),
-                     float(t_found) if found else float(budget), geodesic, float(length), arrays["time"], arrays["position"],
-                     arrays["heading"], arrays["hit"].astype(bool), arrays["path_length"], arrays["error"],
-                     arrays["map_error"], arrays["spread"], arrays["region_area"], arrays["region_hit"].astype(bool),
-                     np.array(path_pts), post.astype(np.float32),
-                     {"experiment": config.to_dict(),
-                      "search": search.to_dict() | {"start": [float(v) for v in start_xy]}},  # the start used
-                     arrays["hpd_level"], **decl)
+    episode = ClosedLoopEpisode(source, seed, policy, variant, estimator, config=config, search=search, world=world,
+                                space=space, world_spec=world_spec, recorder=recorder)
+    while not episode.done:  # one stop per pass (ClosedLoopEpisode.take)
+        episode.take(episode.planned_move())
+    return episode.result()
