@@ -217,6 +217,29 @@ class HouseEnv(gymnasium.Env):
         return {"house": int(house), "seed": int(seed), "source": tuple(ep["xy"]), "spec": spec,
                 "config": replace(self.config, gas=ep["gas"])}
 
+    def episode_setting(self, *, house: int | None = None, seed: int, source=None) -> dict:
+        """The setting of the episode ``reset(options={"house": house, "seed": seed, "source": source})`` runs, to
+        run another policy on it (:func:`psgsl_pgm.search.run_closed_loop`). What is not given (the embedded
+        house's source, a generated home) is drawn with the environment's generator.
+
+        Returns
+        -------
+        dict
+            ``{"house", "seed", "source", "world_spec", "config"}``: ``source``, ``seed``, ``config`` and
+            ``world_spec`` (None: the embedded house) as :func:`run_closed_loop` takes them.
+
+        Examples
+        --------
+        >>> env = HouseEnv(world="house", sources=("bed",))
+        >>> s = env.episode_setting(seed=3)
+        >>> s["source"], s["seed"], s["world_spec"] is None
+        ('bed', 3, True)
+        """
+        options = {k: v for k, v in (("house", house), ("seed", seed), ("source", source)) if v is not None}
+        ep = self._draw(options)
+        return {"house": ep["house"], "seed": ep["seed"], "source": ep["source"], "world_spec": ep["spec"],
+                "config": ep["config"]}
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         ep = self._draw(dict(options or {}))

@@ -116,3 +116,13 @@ def test_bad_input_names_what_was_expected():
         env.step(4)
     with pytest.raises(TypeError, match="integer slot"):
         env.step(1.5)
+
+
+def test_the_episode_setting_is_the_episode_a_reset_runs():
+    env = HouseEnv(houses=2, seeds=2, search=SHORT)
+    s = env.episode_setting(house=1, seed=1)
+    _, info = env.reset(seed=0, options={"house": 1, "seed": 1})
+    assert (info["house"], info["seed"], info["source"]) == (s["house"], s["seed"], s["source"]) == (1, 1, s["source"])
+    assert s["config"].gas in s["world_spec"].ontology.gases
+    truth = env.unwrapped._episode.world.source
+    np.testing.assert_allclose(truth, s["source"])
