@@ -6,8 +6,8 @@ world, the robot's beliefs, the success rule and the declaration rule are those 
 
 **Reset.** The common first stop (the look-around at the start) is part of the reset; the observation is the robot's
 after it. ``reset(seed=...)`` seeds the environment's generator, which draws each episode: with
-``world="generated"`` a generated home and an episode seed of the split (:func:`psgsl_pgm.search._split.benchmark_sample`,
-development homes 0, 1, … by default) and the episode's gas and source as the benchmark draws them
+``world="generated"`` a generated home and an episode seed of the split
+(:func:`psgsl_pgm.search._split.benchmark_sample`, development homes 0, 1, … by default) and the episode's gas and source as the benchmark draws them
 (:func:`psgsl_pgm.search._episodes.draw_episode`, the world's own ontology); with ``world="house"`` the embedded
 house, a seed of :func:`psgsl_pgm.search._split.house_seeds` and one of ``sources``. ``options={"house": h,
 "seed": s}`` (and ``"source"`` in the embedded house) picks an episode instead. The world itself is seeded by the
@@ -113,8 +113,8 @@ class HouseEnv(gymnasium.Env):
     ========== ================ =============================================================================
 
     Everything in it is the robot's: its readings, its believed pose, its beliefs and its map. The info holds
-    ``action_mask`` ((N,) bool), ``time`` (s) and the episode's ``house``, ``seed`` and ``source``; at a declaration
-    also ``declared_correct`` and ``declared_error`` (m).
+    ``action_mask`` ((N,) bool), ``time`` (s) and the episode's ``house`` and ``seed``; once the episode is over also
+    the true ``source``, and at a declaration ``declared_correct`` and ``declared_error`` (m).
     """
 
     metadata = {"render_modes": []}
@@ -303,7 +303,10 @@ class HouseEnv(gymnasium.Env):
 
     def _info(self) -> dict:
         ep = self._episode
-        info = {"action_mask": self._candidates.mask.copy(), "time": float(ep.time)} | self._label
+        info = {"action_mask": self._candidates.mask.copy(), "time": float(ep.time), "house": self._label["house"],
+                "seed": self._label["seed"]}
+        if ep.done:  # the truth, once the episode is over (for the evaluation, never for a decision)
+            info["source"] = self._label["source"]
         if ep.declaration is not None:
             out = ep.declaration_outcome()
             info |= {"declared_correct": out["declared_correct"], "declared_error": out["declared_error"]}
