@@ -26,7 +26,7 @@ def _check(sit):
 
 
 def _along(monkeypatch, runs):
-    from psgsl_pgm.search import _loop
+    from psgsl_pgm.search import _stepper
 
     shares, sits = [], []
 
@@ -35,7 +35,7 @@ def _along(monkeypatch, runs):
         sits.append(sit)
         return P.choose(policy, sit)
 
-    monkeypatch.setattr(_loop, "choose", exhaustive_too)
+    monkeypatch.setattr(_stepper, "choose", exhaustive_too)  # the loop's per-stop code
     for args, kwargs in runs:
         run_closed_loop(*args, **kwargs)
     return shares, sits
