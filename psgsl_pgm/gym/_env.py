@@ -176,6 +176,7 @@ class HouseEnv(gymnasium.Env):
         })
         self.action_space = spaces.Discrete(n)
         self._specs: dict = {}  # generated home -> (world, findable sources)
+        self._spaces: dict = {}  # (house, seed) -> FreeSpace of the last episode
         self._episode = None
         self._candidates = None
         self._pending = False
@@ -243,8 +244,11 @@ class HouseEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         ep = self._draw(dict(options or {}))
+        key = (ep["house"], ep["seed"])  # the house's geometry: FreeSpace shares its caches between runs in it
         self._episode = ClosedLoopEpisode(ep["source"], ep["seed"], None, self.variant, self.estimator,
-                                          config=ep["config"], search=self.search, world_spec=ep["spec"])
+                                          config=ep["config"], search=self.search, world_spec=ep["spec"],
+                                          space=self._spaces.get(key))
+        self._spaces = {key: self._episode.space}  # the last episode's: a repeated episode reuses it
         self._label = {"house": ep["house"], "seed": ep["seed"], "source": ep["source"]}
         self._episode.take(self._episode.first_move())
         self._pending = self._episode.done  # ended at the look-around: the first step reports it

@@ -33,7 +33,7 @@ def test_registered_by_the_gym_module_only():
 def test_passes_gymnasiums_check():
     from gymnasium.utils.env_checker import check_env
 
-    check_env(HouseEnv(world="house", search=SHORT), skip_render_check=True)
+    check_env(HouseEnv(world="house", seeds=1, search=SHORT), skip_render_check=True)
 
 
 def test_a_seed_gives_the_same_episode():
@@ -125,3 +125,24 @@ def test_the_episode_setting_is_the_episode_a_reset_runs():
     assert s["config"].gas in s["world_spec"].ontology.gases
     truth = env.unwrapped._episode.world.source
     np.testing.assert_allclose(truth, s["source"])
+
+
+def test_a_repeated_episode_reuses_the_geometry_and_is_the_same_episode():
+    def play(env, actions):
+        obs, _ = env.reset(seed=0, options={"seed": 2, "source": "bed"})
+        out = [obs]
+        for a in actions:
+            obs, _, term, trunc, _ = env.step(a)
+            out.append(obs)
+            if term or trunc:
+                break
+        return out
+
+    actions = [3, 0, 7, 1, 12, 5, 0, 2]
+    warm = HouseEnv(world="house", search=SHORT)
+    play(warm, actions[::-1])  # other moves first: the shared FreeSpace caches other cells
+    space = warm._spaces[(None, 2)]
+    again = play(warm, actions)
+    assert warm._episode.space is space
+    fresh = play(HouseEnv(world="house", search=SHORT), actions)
+    assert len(again) == len(fresh) > 2 and all(_same(a, b) for a, b in zip(again, fresh))
