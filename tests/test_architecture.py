@@ -11,7 +11,7 @@ PACKAGE = Path(psgsl_pgm.__file__).parent
 
 #: docs/architecture.md, bottom to top; a layer imports only from its own rank or lower ones
 RANK = {"kernels": 0, "_shared": 1, "geometry": 2, "io": 3, "core": 4, "olfaction": 5, "networks": 5, "sim": 6,
-        "runs": 7, "ros": 7.5, "experiment": 8, "search": 8.5, "teaching": 9, "cli": 10}
+        "runs": 7, "ros": 7.5, "experiment": 8, "search": 8.5, "teaching": 9, "gym": 9, "cli": 10}
 ROOT_MODULES = 11  # psgsl_pgm/__init__.py and __main__.py: they may import any layer
 
 

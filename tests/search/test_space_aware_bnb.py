@@ -27,7 +27,7 @@ def _check(sit):
 
 
 def _along(monkeypatch, runs):
-    from psgsl_pgm.search import _loop
+    from psgsl_pgm.search import _stepper
 
     shares, sits = [], []
 
@@ -36,7 +36,7 @@ def _along(monkeypatch, runs):
         sits.append(sit)
         return choose(policy, sit)
 
-    monkeypatch.setattr(_loop, "choose", exhaustive_too)
+    monkeypatch.setattr(_stepper, "choose", exhaustive_too)  # the loop's per-stop code
     for args, kwargs in runs:
         run_closed_loop(*args, **kwargs)
     return shares, sits
