@@ -300,7 +300,21 @@ def wilson_interval(successes: int, n: int, *, level: float = 0.95) -> list:
     """Wilson score interval of a binomial proportion, [lo, hi].
 
     Never a point: at 0 or n successes it is [0, hi] or [lo, 1] with hi > 0, lo < 1 (the same interval as
-    ``scipy.stats.binomtest(successes, n).proportion_ci(method="wilson")``).
+    ``scipy.stats.binomtest(successes, n).proportion_ci(method="wilson")``; Wilson, *JASA* 22, 209-212, 1927).
+
+    Parameters
+    ----------
+    successes : int
+        Number of successes, 0 ≤ ``successes`` ≤ ``n``.
+    n : int
+        Number of trials; below 1 there is no interval.
+    level : float, keyword-only
+        Confidence level, in (0, 1).
+
+    Returns
+    -------
+    list of float
+        ``[lo, hi]``, within [0, 1]; ``[nan, nan]`` when ``n`` < 1.
 
     Examples
     --------

@@ -32,7 +32,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig
-from ..search._loop import SearchConfig
+from ..search._settings import SearchConfig
 from ..search._policies import Decision
 from ..search._split import benchmark_sample, house_seeds
 from ..search._stepper import ClosedLoopEpisode

@@ -37,7 +37,7 @@ from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig
 from ..runs._key import digest, run_key, world_key
 from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sources, robot_ontology
 from ._grid import closed_loop_in_world
-from ._loop import SearchConfig
+from ._settings import SearchConfig
 from ._policies import POLICIES, SEMANTICS_ALONE
 from ._reactive import REACTIVE
 from ._split import benchmark_sample, check_split

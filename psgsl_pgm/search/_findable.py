@@ -48,7 +48,7 @@ def findability(world, seed: int = 0, *, found_radius: float | None = None, clea
     from .._shared._validate import positive
     from ..sim._camera import Camera
     from ._detection import DetectionModel
-    from ._loop import SearchConfig
+    from ._settings import SearchConfig
     from ._space import FreeSpace
 
     defaults = SearchConfig()
@@ -87,7 +87,7 @@ def check_findable(world, seed: int = 0, *, found_radius: float | None = None, c
                    sources=None) -> dict:
     """:func:`findability`, refusing (ValueError naming the source and the gap) a source never found, and a source
     found where the robot starts (a search would end before its first reading: nothing to measure)."""
-    from ._loop import SearchConfig
+    from ._settings import SearchConfig
 
     clearance_used = world.clearance if clearance is None else clearance
     found_radius = SearchConfig().found_radius if found_radius is None else found_radius

@@ -43,7 +43,7 @@ from ..ros._time import DEFAULT_TOLERANCE
 from ..sim import Camera, DetectorModel, GasSensor, default_world, load_world
 from ._declare import propose_declaration
 from ._detection import DetectionModel
-from ._loop import SearchConfig
+from ._settings import SearchConfig
 from ._choose import choose
 from ._policies import POLICIES, Situation, check_semantics_alone
 from ._space import FreeSpace

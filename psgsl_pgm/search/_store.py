@@ -11,7 +11,7 @@ from ..experiment._config import source_label
 from ..experiment._store import read_run_key as _read_run_key
 from ..io._npyfile import READ_ERRORS, load_npy
 from ..runs._runner import atomic_write
-from ._loop import SearchRun
+from ._settings import SearchRun
 
 __all__ = ["read_run_key", "load_search_run", "save_search_run", "search_run_path", "write_search_run"]
 

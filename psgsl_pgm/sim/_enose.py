@@ -76,6 +76,17 @@ def draw_gas(gases, seed: int) -> str:
     """The episode's gas when it is unknown to the robot: one of ``gases``, uniformly, from a stream of ``seed``
     of its own (no other stream of the world draws differently).
 
+    Parameters
+    ----------
+    gases : sequence of str
+        The ontology's gases.
+    seed : int
+        The episode's seed.
+
+    Returns
+    -------
+    str
+
     Examples
     --------
     >>> draw_gas(("smoke", "ethanol"), 0) in ("smoke", "ethanol")

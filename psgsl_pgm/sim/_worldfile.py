@@ -680,7 +680,22 @@ def _load_sources(where: str, sources) -> dict:
 def check_free_cells(spec: WorldSpec, seed: int = 0, *, limit: int = MAX_FREE_CELLS) -> None:
     """ValueError naming the world's ``resolution`` when its house has more free cells than ``limit``
     (:data:`MAX_FREE_CELLS`: the estimators and the closed loop would need more than 2 GB), with the resolution
-    that fits."""
+    that fits.
+
+    Parameters
+    ----------
+    spec : WorldSpec
+        The world (its map and ``resolution``).
+    seed : int
+        The seed of the house to count (a world file's house is the same for every seed).
+    limit : int, keyword-only
+        The most free cells allowed.
+
+    Raises
+    ------
+    ValueError
+        More free cells than ``limit``; the message names ``resolution`` and a value that fits.
+    """
     house = spec.house(seed)
     g = house.grid
     free = int(g.free.sum())

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from psgsl_pgm.search import SearchConfig, run_closed_loop
-from psgsl_pgm.search._policies import choose
+from psgsl_pgm.search._choose import choose
 from psgsl_pgm.search._stepper import ClosedLoopEpisode
 
 ARRAYS = ("time", "position", "heading", "hit", "path_length", "error", "map_error", "spread", "region_area",
