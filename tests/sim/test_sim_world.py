@@ -79,5 +79,5 @@ def test_public_names():
         if callable(obj):
             assert obj.__module__.startswith("psgsl_pgm."), (name, obj.__module__)
         else:  # the constants: class and room names, confusion groups, limits
-            assert isinstance(obj, (str, tuple, int)) and not isinstance(obj, bool) and obj, (name, obj)
+            assert isinstance(obj, (str, tuple, int, float)) and not isinstance(obj, bool) and obj, (name, obj)
     assert sim.GridMap is psgsl_pgm.GridMap and sim.cells_clear is psgsl_pgm.geometry._sight.cells_clear
