@@ -133,7 +133,7 @@ def main(argv=None) -> None:
             space = FreeSpace(house, Camera(), clearance=search.clearance, spacing=search.spacing,
                               n_headings=search.n_headings)
             detection = DetectionModel.from_house(house, search.found_radius,
-                                                  miss_probability=search.miss_probability)
+                                                  miss_probability=search.miss_probability or 0.0)
             space.cover(detection)
             geometry[home, seed] = space, detection
         m = classify(npz, *geometry[home, seed], search)

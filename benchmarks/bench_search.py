@@ -8,7 +8,7 @@ process (not a test).
   the 2-m horizon, the 1-m lattice over the rest of the free space) — median over repeats with warm caches
   (views, Green's rows and found regions depend on the geometry and the run only), and the first (cold) decision; the same for the 2-m horizon alone. The
   target is ≤ 20 ms per decision with warm caches;
-* one semantic-term evaluation p(s | z) on the same map (eq. ``prob-semantics-final``): the unit of the ratio;
+* one semantic-term evaluation p(s | z) on the same map (eq. (20)): the unit of the ratio;
 * one 1000-s house episode (``infotaxis/semantics+rooms``, seed 0, never found: found_radius = 1 mm): its real-time
   factor (1000 s of simulated time / wall time, best and median of ``--episodes`` runs of the same seeded
   episode on the prepared geometry), and the split of one run into gas simulation (the filament steps while
@@ -222,7 +222,7 @@ def _space_aware_homes(a):
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors, visit
     from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, _space, run_closed_loop
-    from psgsl_pgm.search._policies import choose
+    from psgsl_pgm.search._choose import choose
     from psgsl_pgm.sim import default_world
     from psgsl_pgm.sim._generate import generate_house
 

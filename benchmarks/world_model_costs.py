@@ -37,40 +37,42 @@ def models() -> list:
     return ["ideal"] + [f"ideal+{c}" for c in WORLD_COMPONENTS] + ["realistic"]
 
 
-def run_search(out: Path, model: str, *, first_seed: int, seeds: int, workers: int) -> dict:
+def run_search(out: Path, model: str, *, first_seed: int, seeds: int, workers: int, end: str = "declare") -> dict:
     """``psgsl search`` for one world model; (summary, paired) of the oven."""
     folder = out / model
     cmd = [sys.executable, "-m", "psgsl_pgm", "search", "--sources", "oven", "--policies", "infotaxis",
            "semantic-modes", "--variants", "olfaction", "semantics+rooms", "--first-seed", str(first_seed),
            "--seeds", str(seeds), "--world-model", model, "--workers", str(workers), "--out", str(folder),
-           "--quiet", "--no-figures"]
+           "--end", end, "--quiet", "--no-figures"]
     subprocess.run(cmd, check=True)
     summary = json.loads((folder / "summary.json").read_text())["oven/infotaxis"]
     paired = json.loads((folder / "oven-infotaxis" / "paired.json").read_text())
     return {"command": "psgsl " + " ".join(cmd[3:]), "summary": summary, "paired": paired.get(PRIMARY)}
 
 
-def run_recalibrated(out: Path, model: str, plume: tuple, *, first_seed: int, seeds: int, workers: int) -> dict:
+def run_recalibrated(out: Path, model: str, plume: tuple, *, first_seed: int, seeds: int, workers: int,
+                     end: str = "declare") -> dict:
     """The same grid as :func:`run_search` with the plume parameters (D, τ, κ) and tempering β fitted in ``model``."""
     from psgsl_pgm.experiment import ExperimentConfig
-    from psgsl_pgm.search import run_search_grid
+    from psgsl_pgm.search import SearchConfig, run_search_grid
 
     d, tau, kappa, beta = plume
     config = ExperimentConfig(world_model=model, diffusivity=d, lifetime=tau, encounter_scale=kappa, tempering=beta)
     folder = out / f"{model}-recalibrated"
     run_search_grid(("oven",), ("infotaxis", "semantic-modes"), ("olfaction", "semantics+rooms"), ("infotaxis",),
                     range(first_seed, first_seed + seeds), out=folder, workers=workers, config=config,
-                    progress=False, figures=False)
+                    search=SearchConfig(end=end), progress=False, figures=False)
     summary = json.loads((folder / "summary.json").read_text())["oven/infotaxis"]
     paired = json.loads((folder / "oven-infotaxis" / "paired.json").read_text())
     return {"command": f"run_search_grid(config={config!r})", "summary": summary, "paired": paired.get(PRIMARY)}
 
 
-def run_benchmark(out: Path, model: str, *, homes: int, seeds: int, workers: int) -> dict:
+def run_benchmark(out: Path, model: str, *, homes: int, seeds: int, workers: int, end: str = "declare") -> dict:
     folder = out / f"benchmark-{model}"
     cmd = [sys.executable, "-m", "psgsl_pgm", "benchmark", "--houses", str(homes), "--seeds", str(seeds),
            "--policies", "infotaxis", "--variants", "olfaction", "semantics+rooms", "--conditions", "right-ontology",
-           "--world-model", model, "--workers", str(workers), "--out", str(folder), "--quiet", "--no-figures"]
+           "--world-model", model, "--workers", str(workers), "--out", str(folder), "--end", end, "--quiet",
+           "--no-figures"]
     subprocess.run(cmd, check=True)
     summary = json.loads((folder / "summary.json").read_text())
     return {"command": "psgsl " + " ".join(cmd[3:]), "primary": summary["primary"]}
@@ -133,20 +135,22 @@ def main(argv=None) -> int:
     ap.add_argument("--recalibrated", action="append", default=[], metavar="MODEL=D,TAU,KAPPA,BETA")
     ap.add_argument("--benchmark-homes", type=int, default=0)
     ap.add_argument("--benchmark-seeds", type=int, default=2)
+    ap.add_argument("--end", choices=("declare", "reach"), default="declare",
+                    help="how the runs end (psgsl search --end; default: %(default)s)")
     args = ap.parse_args(argv)
     names = args.models or models()
     args.out.mkdir(parents=True, exist_ok=True)
-    results = {m: run_search(args.out, m, first_seed=args.first_seed, seeds=args.seeds, workers=args.workers)
-               for m in names}
+    results = {m: run_search(args.out, m, first_seed=args.first_seed, seeds=args.seeds, workers=args.workers,
+                             end=args.end) for m in names}
     for item in args.recalibrated:
         model, _, values = item.partition("=")
         plume = tuple(float(v) for v in values.split(","))
         if len(plume) != 4:
             ap.error(f"--recalibrated takes MODEL=D,TAU,KAPPA,BETA, got {item!r}")
         results[f"{model}, recalibrated"] = run_recalibrated(args.out, model, plume, first_seed=args.first_seed,
-                                                             seeds=args.seeds, workers=args.workers)
+                                                             seeds=args.seeds, workers=args.workers, end=args.end)
     bench = {m: run_benchmark(args.out, m, homes=args.benchmark_homes, seeds=args.benchmark_seeds,
-                              workers=args.workers) for m in names} if args.benchmark_homes else {}
+                              workers=args.workers, end=args.end) for m in names} if args.benchmark_homes else {}
     version = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
                              cwd=Path(__file__).parent).stdout.strip() or "unknown"
     text = report(args.out, results, bench, first_seed=args.first_seed, seeds=args.seeds, version=version)

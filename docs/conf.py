@@ -38,6 +38,9 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax 3 copied into the site's _static/mathjax and loaded from there (mathjax_path), never from a CDN:
+    # the site typesets its formulas offline. The module's name has hyphens; Sphinx imports it by that name.
+    "sphinx-mathjax-offline",
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_nb",
@@ -99,6 +102,13 @@ sphinx_gallery_conf = {
     "reset_modules": ("matplotlib",),
     "show_memory": False,
     "show_signature": False,
+    # the execution-times page loads DataTables, jQuery and Bootstrap from CDNs: the site must read offline
+    "write_computation_times": False,
+    # names of the package in the examples' code link to their reference pages, and each reference page lists the
+    # examples that use it ("Examples using ...", the minigallery of docs/_templates/autosummary)
+    "doc_module": ("psgsl_pgm",),
+    "reference_url": {"psgsl_pgm": None},
+    "backreferences_dir": str(DOCS / "reference" / "api" / "backreferences"),
 }
 
 # ---------------------------------------------------------------- the reference: one page per public package
@@ -161,11 +171,13 @@ html_title = f"psgsl-pgm {release}"
 html_static_path = ["_static"]
 html_css_files = ["psgsl.css"]
 html_show_sourcelink = False
+html_sourcelink_suffix = ""  # the copied sources keep their own suffix: a notebook downloads as .ipynb
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "header_links_before_dropdown": 7,
-    "secondary_sidebar_items": ["page-toc"],
+    # a notebook's page also offers the notebook itself (docs/_templates/download-notebook.html: empty elsewhere)
+    "secondary_sidebar_items": ["download-notebook", "page-toc"],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
@@ -307,20 +319,42 @@ def _missing_reference(app, env, node, contnode):
     return None
 
 
-#: The paper's equation labels the docstrings cite (as ``label``); each links to its equation on the reference's
-#: "Paper <-> code" page.
-EQUATION_LABELS = ("decomposition-objective", "combined-conditionals", "pZcGivenSc", "prob-semantics-final")
+#: The paper's labelled equations: its own number (a count of its numbered equation environments) -> LaTeX label.
+#: Each links to its equation on the reference's "Paper <-> code" page, which tabulates all 31.
+PAPER_EQUATIONS = {1: "decomposition-objective", 11: "combined-conditionals", 15: "pZcGivenSc",
+                   20: "prob-semantics-final"}
 
 
 def _link_equations(app, what, name, obj, options, lines):
-    """``prob-semantics-final`` in a docstring becomes a link to that equation, still showing its label."""
+    """``eq. (20)`` in a docstring becomes a link to that equation; a LaTeX label cited as ````label```` shows the
+    paper's number and links the same way."""
     import re
 
-    pattern = re.compile(r"``(" + "|".join(map(re.escape, EQUATION_LABELS)) + r")``")
-    lines[:] = [pattern.sub(r":ref:`\1 <eq-\1>`", line) for line in lines]
+    numbers = "|".join(str(n) for n in PAPER_EQUATIONS)
+    by_label = {label: n for n, label in PAPER_EQUATIONS.items()}
+    cited = re.compile(r"\b([Ee]qs?\.) \((" + numbers + r")\)(?!\w)")
+    labelled = re.compile(r"``(" + "|".join(map(re.escape, by_label)) + r")``")
+    lines[:] = [labelled.sub(lambda m: f":ref:`({by_label[m.group(1)]}) <eq-{m.group(1)}>`",
+                             cited.sub(lambda m: f"{m.group(1)} :ref:`({m.group(2)}) "
+                                                 f"<eq-{PAPER_EQUATIONS[int(m.group(2))]}>`", line))
+                for line in lines]
+
+
+def _notebook_links(app, doctree):
+    """A Markdown link to a teaching notebook (``[03](notebooks/03_fusion.ipynb)``, written so that it also works
+    on GitHub) goes through docs/teaching/notebooks, a link to the repository's notebooks/; Sphinx resolves the
+    link to the notebook's real path, outside the source folder. Point it at the page the toctree builds."""
+    from sphinx import addnodes
+
+    real = (ROOT / "notebooks").as_posix()
+    for node in doctree.findall(addnodes.pending_xref):
+        target = node.get("reftarget", "")
+        if node.get("refdomain") == "doc" and target.startswith(real + "/"):
+            node["reftarget"] = "teaching/notebooks/" + target[len(real) + 1:]
 
 
 def setup(app):
+    app.connect("doctree-read", _notebook_links)
     app.connect("autodoc-process-docstring", _constant_doc)
     app.connect("autodoc-process-docstring", _link_equations)
     app.connect("missing-reference", _missing_reference)

@@ -2,7 +2,7 @@
 Exact vs approximate class prior
 ================================
 
-Eq. ``prob-semantics-final`` is exact when the class prior is the background β = p(o | ¬s); with the marginal
+Eq. (20) is exact when the class prior is the background β = p(o | ¬s); with the marginal
 p(o) it is the paper's approximation p(o_ni | s_c) ≈ p(o_ni), whose error shrinks with the number of cells n.
 Both are compared with the exact posterior of Network A on seeded random problems
 (:func:`psgsl_pgm.teaching.approximation_error`).

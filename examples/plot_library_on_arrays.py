@@ -3,8 +3,8 @@ The library on your own arrays
 ==============================
 
 A semantic map's class beliefs p(o_c | z_c) and an olfactory estimate p(s | g), both made up here, turned into the
-semantic term p(s | z) (eq. ``prob-semantics-final``), the fused posterior p(s | g, z) (eq.
-``combined-conditionals``) and the information gain I(S; O_n) of observing each cell (Sec. "Information Gain
+semantic term p(s | z) (eq. (20)), the fused posterior p(s | g, z) (eq.
+(11)) and the information gain I(S; O_n) of observing each cell (Sec. "Information Gain
 Optimization").
 """
 

@@ -1,5 +1,5 @@
-r"""Sec. "Separating the Semantic and Olfactory Estimation Processes": eq. ``decomposition-objective`` →
-eq. ``combined-conditionals``, step by step, on Network B (binary S_i, constraint α) — and A ≡ B | α = 1.
+r"""Sec. "Separating the Semantic and Olfactory Estimation Processes": eq. (1) →
+eq. (11), step by step, on Network B (binary S_i, constraint α) — and A ≡ B | α = 1.
 
 The paper's chain of equalities (its equations are unlabelled between the two labelled ones; we number
 them (F1)–(F10) in the paper's order). s is a configuration of S = (S_1 … S_n), o_M an object map:
@@ -15,7 +15,7 @@ them (F1)–(F10) in the paper's order). s is a configuration of S = (S_1 … S_
 (F8)                 = p(s | g) Σ_M p(s | z, α, o_M) p(o_M | z, α) = p(s | g) p(s | z, α)
                        needs  S ⟂ Z | α, O                                                    d-separation
 (F9)  p(s | z, α) ∝ p(z, α | s) = p(z | s) p(α | s)                needs  Z ⟂ α | S          d-separation
-(F10) on single-source s_c: p(s_c | g, z, α) ∝ p(s_c | g) p(s_c | z)       eq. ``combined-conditionals``
+(F10) on single-source s_c: p(s_c | g, z, α) ∝ p(s_c | g) p(s_c | z)       eq. (11)
 
 Every step is exact in the model; the only assumption is the uniform source prior of (F7). Without it the
 exact statement is p(s_c | g, z, α) ∝ p(s_c | g) p(s_c | z) / p(s_c) (what ``psgsl_pgm.fuse(..., prior=)``
@@ -185,7 +185,7 @@ def test_every_step_numerically(uniform):
         za = table(b, sorted(z) + ["alpha"], s_ev)[(0,) * len(z) + (1,)]  # p(z, α = true | s)
         assert_close(za, p_evidence(z, s_ev) * table(b, ["alpha"], s_ev)[1], what="(F9) Z ⟂ α | S")
 
-    # (F10) eq. combined-conditionals, with the olfactory and semantic posteriors over the cells (α given)
+    # (F10) eq. (11), with the olfactory and semantic posteriors over the cells (α given)
     post = np.array([target[e] for e in single])
     p_s_g = np.array([table(b, S, {**g, **alpha})[e] for e in single])  # p(s_c | g, α)
     p_s_z = np.array([p_s_za[e] for e in single])  # p(s_c | z, α)
@@ -194,6 +194,6 @@ def test_every_step_numerically(uniform):
     assert_close(normalised(p_s_g * p_s_z / prior), post, what="(F10) general form ÷ p(s)")
     product = normalised(p_s_g * p_s_z)
     if uniform:
-        assert_close(product, post, what="(F10) eq. combined-conditionals (uniform prior)")
+        assert_close(product, post, what="(F10) eq. (11) (uniform prior)")
     else:  # the uniform-prior assumption (F7) matters: the plain product is off
         assert np.max(np.abs(product / post - 1)) > 1e-3

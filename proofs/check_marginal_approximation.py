@@ -5,7 +5,7 @@ and its error, on Network A.
 (M2) law of total probability: p(o_ni) = p(s_n) p(o_ni | s_n) + p(¬s_n) p(o_ni | ¬s_n)            exact
 (M3) p(¬s_n) ≫ p(s_n)  ⇒  p(o_ni | s_c) ≈ p(o_ni); the error is exactly p(o_ni) − β_i = p(s_n)(L_i − β_i),
      O(1/n) with a uniform source prior                                                      APPROXIMATE
-(M4) then p(z_n | s_c) ≈ p(z_n) for n ≠ c and Π_{n∖c} p(z_n) is dropped (eq. ``prob-semantics-final``):
+(M4) then p(z_n | s_c) ≈ p(z_n) for n ≠ c and Π_{n∖c} p(z_n) is dropped (eq. (20)):
      the approximate weight is Σ_i q_ci / ρ_i L_i with ρ = p(o), q under ρ. Exactly (m = 1, uniform prior,
      ρ = L/n + (1 − 1/n) β):
          approx_c ∝ exact_c / (1 + (r_c − 1)/n),   r_c = p(z_c | s_c) / p(z_c | ¬s_c) = Λ_c·L / Λ_c·β,

@@ -1,20 +1,20 @@
 r"""Sec. "Derivation of the Distribution p(s_c | z)": from the k^n sum over object maps to the O(k) term,
-eq. ``pZcGivenSc`` and eq. ``prob-semantics-final``, step by step on Network A (S over cells).
+eq. (15) and eq. (20), step by step on Network A (S over cells).
 
 (T1) p(s_c | z) = Σ_M p(s_c | z, o_M) p(o_M | z) = Σ_M p(s_c | o_M) p(o_M | z)   needs S ⟂ Z | O    exact
      — k^n object maps: intractable beyond toy sizes.
 (T2) p(s_c | z) ∝ p(s_c) p(z | s_c)   (∝ p(z | s_c) with the paper's uniform prior)              Bayes
 (T3) p(z_n, z_¬n | s_c) = p(z_n | s_c) p(z_¬n | s_c)                  needs Z_n ⟂ Z_¬n | S        exact
 (T4) p(s_c | z) ∝ p(s_c) Π_n p(z_n | s_c)                                                          exact
-(T5) eq. ``pZcGivenSc``, lines 1–2: p(z_n | s_c) = Σ_i p(z_n | o_ni) p(o_ni | s_c)   needs Z_n ⟂ S | O_n
-(T6) eq. ``pZcGivenSc``, lines 3–4: = p(z_n) Σ_i p(o_ni | z_n) / p(o_ni) · p(o_ni | s_c)      Bayes, exact
+(T5) eq. (15), lines 1–2: p(z_n | s_c) = Σ_i p(z_n | o_ni) p(o_ni | s_c)   needs Z_n ⟂ S | O_n
+(T6) eq. (15), lines 3–4: = p(z_n) Σ_i p(o_ni | z_n) / p(o_ni) · p(o_ni | s_c)      Bayes, exact
      with p(o_ni) the model's marginal and p(o_ni | z_n) the belief under that marginal.
 (T7) n = c: p(o_ci | s_c) is the ontology row L (the CPD of O_c at S = c)                         exact
 (T8) n ≠ c: p(o_ni | s_c) = p(o_ni | ¬s_n) = β; the paper then uses ≈ p(o_ni) (the approximation of
      ``check_marginal_approximation.py``). Exactly, p(z_n | s_c) = p(z_n | ¬s_n) for every c ≠ n, so
      Π_{n≠c} p(z_n | s_c) = Π_n p(z_n | ¬s_n) / p(z_c | ¬s_c), and
 (T9) p(s_c | z) ∝ p(s_c) p(z_c | s_c) / p(z_c | ¬s_c) = p(s_c) Σ_i q_ci / β_i · L_i,   q_c ∝ β · p(z_c | o)
-     — eq. ``prob-semantics-final`` with p(o_ci) := β: O(k) per cell and exact.
+     — eq. (20) with p(o_ci) := β: O(k) per cell and exact.
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ def test_brute_force_over_object_maps(setup):
     q = problem.class_probs()  # under β
     closed = semantic_source_probability(q, problem.source_likelihood, problem.background,
                                          source_prior=problem.source_prior)
-    assert_close(closed, exact, what="(T9) eq. prob-semantics-final with p(o) := β is exact")
+    assert_close(closed, exact, what="(T9) eq. (20) with p(o) := β is exact")
 
 
 def test_factorisation_and_eq_pZcGivenSc(setup):
@@ -104,8 +104,8 @@ def test_factorisation_and_eq_pZcGivenSc(setup):
             assert_close(p_o_s, L if c == n else beta, rtol=1e-14, what="(T7)/(T8) p(o_n | s_c)")
             line2 = p_zn_o @ p_o_s  # Σ_i p(z_n | o_ni) p(o_ni | s_c)
             line4 = p_zn * np.sum(p_o_zn / p_o * p_o_s)  # p(z_n) Σ_i p(o_ni | z_n)/p(o_ni) p(o_ni | s_c)
-            assert_close(line2, p_z_given_s[n_idx, c_idx], what="(T5) eq. pZcGivenSc lines 1-2")
-            assert_close(line4, p_z_given_s[n_idx, c_idx], what="(T6) eq. pZcGivenSc lines 3-4")
+            assert_close(line2, p_z_given_s[n_idx, c_idx], what="(T5) eq. (15) lines 1-2")
+            assert_close(line4, p_z_given_s[n_idx, c_idx], what="(T6) eq. (15) lines 3-4")
         # (T8): p(z_n | s_c) is the same for every c ≠ n
         off = np.delete(p_z_given_s[n_idx], n_idx)
         assert_close(off, np.full(off.size, off[0]), rtol=1e-14, what="(T8) p(z_n|s_c) constant for c ≠ n")

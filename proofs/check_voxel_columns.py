@@ -4,7 +4,7 @@ r"""Sec. "Voxelized Scene Representations": a 2-D cell is a vertical column of v
      S ranges over voxels; "the source is in column c" is the disjoint union of {S = v}, v ∈ c — exact.
      Checked with a deterministic child K = column(S) added to Network A: pgmpy's p(K | z) equals the
      voxel sum and the core's ``semantic_source_probability(..., column_axis=2, source_prior=...)``.
-(V2) each p(s_v | z) is eq. ``prob-semantics-final`` over voxels (exact with p(o) := β).
+(V2) each p(s_v | z) is eq. (20) over voxels (exact with p(o) := β).
 (V3) fusion with a 2-D olfactory method: when p(g | v) = p(g | column of v),
      p(s_c | g, z) ∝ p(s_c | g) p(s_c | z) / p(s_c) over columns — exact.
 (V4) when p(g | v) varies inside a column (a 3-D olfactory model), fusing the column sums is not exact —
@@ -60,7 +60,7 @@ def test_v1_v2_column_sum_semantics_only():
     core_voxel = semantic_source_probability(q, problem.source_likelihood, problem.background, **kwargs)
     core_column = semantic_source_probability(q, problem.source_likelihood, problem.background, column_axis=2,
                                               **kwargs)
-    assert_close(core_voxel, voxel, what="(V2) eq. prob-semantics-final per voxel")
+    assert_close(core_voxel, voxel, what="(V2) eq. (20) per voxel")
     assert_close(core_column, column, what="(V1) core column_axis")
 
 

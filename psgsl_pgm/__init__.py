@@ -4,9 +4,9 @@ The closed-form estimator of Ojeda, Monroy & Gonzalez-Jimenez, *PSGSL: A Probabi
 Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on full maps:
 
 * :func:`semantic_source_probability` — p(s_c | z) ∝ Σ_i p(o_ci | z_c)/p(o_ci) · p(o_ci | s_c)
-  (eq. ``prob-semantics-final``), with gas mixtures (Sec. "Probabilistic Gas Classification") and voxel
+  (eq. (20)), with gas mixtures (Sec. "Probabilistic Gas Classification") and voxel
   columns (Sec. "Voxelized Scene Representations");
-* :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. ``combined-conditionals``);
+* :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. (11));
 * :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
   :class:`ClassBeliefMap` — the robot's dense class beliefs over cells or voxels, frame by frame;
 * :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
@@ -26,6 +26,7 @@ Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian net
 from .core._beliefs import room_evidence, update_class_probs
 from .core._class_beliefs import ClassBeliefMap
 from .core._fusion import fuse
+from .core._gas_belief import GasBelief
 from .core._infogain import semantic_information_gain
 from .core._kitchen import kitchen_example, kitchen_ontology
 from .core._ontology import Ontology
@@ -38,7 +39,35 @@ __version__ = "0.1.0"
 
 def load_world(path):
     """Load a world file (a user's house: map, rooms, objects, ontology, wind, sources); see
-    :func:`psgsl_pgm.sim.load_world`. Needs the ``sim`` extra."""
+    :func:`psgsl_pgm.sim.load_world`. Needs the ``sim`` extra.
+
+    Parameters
+    ----------
+    path : str or Path
+        The world file (YAML); the files it names are read relative to its folder.
+
+    Returns
+    -------
+    psgsl_pgm.sim.WorldSpec
+        The checked world: house, ontology, source region, wind, named sources and start.
+
+    Raises
+    ------
+    FileNotFoundError
+        The world file does not exist.
+    ValueError
+        Any bad key or file (also a missing file the world file names), naming the world file and the key.
+
+    Examples
+    --------
+    The world file the package ships (the simulated house of the validation experiment):
+
+    >>> from importlib.resources import as_file, files
+    >>> with as_file(files("psgsl_pgm") / "data" / "worlds" / "house.yaml") as path:
+    ...     world = load_world(path)
+    >>> world.summary()["grid"]["rows"], world.summary()["grid"]["resolution"]
+    (120, 0.1)
+    """
     from .sim import load_world as _load_world
 
     return _load_world(path)
@@ -46,6 +75,7 @@ def load_world(path):
 
 __all__ = [
     "ClassBeliefMap",
+    "GasBelief",
     "GridMap",
     "Ontology",
     "ViewCache",

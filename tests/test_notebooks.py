@@ -27,15 +27,30 @@ NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 CELL_TIMEOUT = 120  # seconds per cell
 KERNEL_NAME = "psgsl-pgm-test"
-#: Appended to each notebook before it runs: the readability problems of every figure still open.
-FIGURE_CHECK = """\
+#: The widest figure a page shows legibly: the article column is about 800 px, so a figure of 10-pt labels drawn
+#: at 100 dpi keeps its text at 9 px or more up to 12.5 in.
+MAX_WIDTH_IN = 12.5
+#: Appended to each notebook before it runs: the readability problems of every figure still open (the package's
+#: rules, and a width the page's column shows without shrinking the text past reading).
+FIGURE_CHECK = f"MAX_WIDTH_IN = {MAX_WIDTH_IN}\n" + """\
 import json as _json
 import matplotlib.pyplot as _plt
 from psgsl_pgm.teaching import figure_problems as _figure_problems
-print(_json.dumps({str(_n): _figure_problems(_plt.figure(_n)) for _n in _plt.get_fignums()}))
+
+def _width_problems(fig, widest=MAX_WIDTH_IN):
+    width = float(fig.get_size_inches()[0])
+    if width <= widest:
+        return []
+    return [f"{width:.1f} in wide: the article column would shrink its text below 9 px (at most {widest} in)"]
+
+
+print(_json.dumps({str(_n): _figure_problems(_plt.figure(_n)) + _width_problems(_plt.figure(_n))
+                   for _n in _plt.get_fignums()}))
 """
 #: A warning as Python prints it ("…: SomethingWarning: message"), wherever it shows up in an output.
 WARNING = re.compile(r"\b\w*Warning\b")
+#: A cell's last expression left unassigned (``fig.colorbar(...)``): its default repr, "<… at 0x…>".
+STRAY_REPR = re.compile(r"<[\w.]+(?: object)? at 0x[0-9a-f]+>")
 
 
 @pytest.fixture(scope="session")
@@ -110,6 +125,8 @@ def output_problems(nb) -> list:
                 problems.append(f"code cell {i} writes to stderr: {text.strip()[:300]!r}")
             elif WARNING.search(text):
                 problems.append(f"code cell {i} shows a warning: {text.strip()[:300]!r}")
+            elif out.get("output_type") == "execute_result" and STRAY_REPR.search(text):
+                problems.append(f"code cell {i} shows an object's repr: {text.strip()[:300]!r}")
     return problems
 
 
@@ -121,6 +138,12 @@ def test_output_problems_finds_stderr_and_warnings():
     assert output_problems(nb) == ["code cell 1 writes to stderr: 'x.py:3: UserWarning: hm'"]
     nb.cells[1].outputs = [nbformat.v4.new_output("execute_result", data={"text/plain": "FutureWarning: y"})]
     assert output_problems(nb) == ["code cell 1 shows a warning: 'FutureWarning: y'"]
+    nb.cells[1].outputs = [nbformat.v4.new_output(
+        "execute_result", data={"text/plain": "<matplotlib.colorbar.Colorbar at 0x7f3a2c1d0e50>"})]
+    assert output_problems(nb) == ["code cell 1 shows an object's repr: "
+                                   "'<matplotlib.colorbar.Colorbar at 0x7f3a2c1d0e50>'"]
+    nb.cells[1].outputs = [nbformat.v4.new_output("execute_result", data={"text/plain": "(4, True)"})]
+    assert output_problems(nb) == []
 
 
 @pytest.mark.slow

@@ -34,3 +34,19 @@ def test_readme_is_short_and_describes_the_software_not_its_history():
 def test_readme_links_point_at_files_that_exist():
     for target in re.findall(r"\]\(((?!https?:)[^)#]+)(?:#[^)]*)?\)", README.read_text()):
         assert (README.parent / target).exists(), f"README links to {target}, which does not exist"
+
+
+def test_readme_names_every_command():
+    """Every command ``psgsl --help`` lists is named in README (as `name`, a world action as `world <action>`)."""
+    import argparse
+
+    from psgsl_pgm.cli._main import build_parser
+
+    text = README.read_text()
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    missing = []
+    for name, parser in sub.choices.items():
+        actions = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        names = [f"{name} {action}" for a in actions for action in a.choices] or [name]
+        missing += [n for n in names if f"`{n}`" not in text]
+    assert missing == []

@@ -69,7 +69,11 @@ def add_parser(subparsers):
                    help=f"ontology conditions among {', '.join(CONDITIONS)} (default: all)")
     p.add_argument("--off-rate", type=float, default=0.1,
                    help="probability of an off-ontology source (a free floor cell) per episode (default: %(default)s)")
-    p.add_argument("--gases", nargs="+", default=["smoke"], help="gases an episode draws from (default: smoke)")
+    p.add_argument("--gases", nargs="+", default=None,
+                   help="gases an episode draws from (default: smoke; with --gas unknown every gas of the ontology)")
+    p.add_argument("--gas", choices=["told", "unknown"], default="told",
+                   help="'unknown': the robot is not told the episode's gas and infers it with its electronic nose "
+                   "(default: told)")
     p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
     p.add_argument("--rooms", type=int, default=None, metavar="N",
@@ -113,10 +117,22 @@ def _run(args) -> int:
     from ..experiment import ExperimentConfig
 
     config = ExperimentConfig(world_model=world_model(args.world_model))
+    gases = args.gases
+    if gases is None:  # the robot told: smoke; not told: any gas of the ontology
+        if args.gas == "unknown":
+            from ..sim import generated_ontology, load_world
+
+            gases = list((generated_ontology() if args.world is None else load_world(args.world).ontology).gases)
+        else:
+            gases = ["smoke"]
     # a test split with --first-house, too many homes or seeds, dev homes in the test set: one line, exit 2,
     # before anything is written
     house_ids, seed_ids = benchmark_sample(args.split, houses=args.houses, seeds=args.seeds,
                                            first_house=args.first_house, world=args.world is not None)
+    if args.world is not None:
+        from ..sim import check_free_cells, load_world
+
+        check_free_cells(load_world(args.world))  # a map too fine for the runs' memory: one line naming 'resolution'
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
     what = args.world if args.world is not None else f"{len(house_ids)} generated homes"
     print(f"psgsl benchmark: {what} ({args.split} split), seeds {seed_ids.start}-{seed_ids.stop - 1}, policies "
@@ -126,10 +142,10 @@ def _run(args) -> int:
     try:
         summary = run_benchmark(out=args.out, houses=args.houses, seeds=args.seeds, world=args.world,
                                 policies=args.policies, variants=args.variants, conditions=args.conditions,
-                                off_rate=args.off_rate, gases=args.gases, first_house=args.first_house,
+                                off_rate=args.off_rate, gases=gases, first_house=args.first_house,
                                 house_options=options, workers=args.workers, scheduler=args.scheduler,
                                 config=config, search=search, progress=not args.quiet, figures=not args.no_figures,
-                                command=command, split=args.split)
+                                command=command, split=args.split, gas_unknown=args.gas == "unknown")
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     p = summary["primary"]["result"]

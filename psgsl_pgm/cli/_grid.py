@@ -21,7 +21,7 @@ import signal
 import sys
 
 __all__ = ["DEFAULT_SOURCES", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "MAX_SEEDS", "MAX_WORKERS",
-           "add_found_arguments", "add_missed_hits_argument", "add_ontology_argument", "add_scheduler_argument",
+           "add_found_arguments", "add_gas_argument", "gas_setting", "add_missed_hits_argument", "add_ontology_argument", "add_scheduler_argument",
            "add_workers_argument", "add_world_arguments", "add_world_model_argument", "interrupted", "missed_hit_rate", "positive_float",
            "positive_int", "seed_count", "seed_range", "unit_float", "worker_count", "world_model", "world_sources"]
 
@@ -110,6 +110,32 @@ def add_world_model_argument(parser) -> None:
                         "(CFD wind, MOX gas sensor, occluding camera with persistent errors, localisation error) or "
                         "'ideal+' components of these: cfd-wind, mox, camera, pose (default: the world file's "
                         "'model', else ideal)")
+
+
+def add_gas_argument(parser) -> None:
+    """``--gas``, shared by ``psgsl experiment`` and ``psgsl search`` (checked by :func:`gas_setting`)."""
+    parser.add_argument("--gas", default=None, metavar="GAS",
+                        help="the source's gas: a gas of the world's ontology, told to the robot, or 'unknown': each "
+                        "episode's gas is drawn from the ontology's gases and the robot infers it with its "
+                        "electronic nose (default: the world file's 'gas', else smoke)")
+
+
+def gas_setting(args, spec) -> dict:
+    """``{"gas": name}`` for :class:`psgsl_pgm.experiment.ExperimentConfig` from ``--gas`` (else the world file's
+    ``gas``), or ``{}`` for the default; a gas the ontology lacks is a :class:`ValueError` naming ``--gas`` (one
+    line, exit 2, nothing written)."""
+    gas = getattr(args, "gas", None)
+    if gas is None:
+        return {"gas": spec.gas} if spec is not None and spec.gas else {}
+    if spec is not None:
+        gases = spec.ontology.gases
+    else:
+        from ..sim._house_ontology import house_ontology
+
+        gases = house_ontology().gases
+    if gas != "unknown" and gas not in gases:
+        raise ValueError(f"--gas {gas}: not a gas of the ontology {list(gases)} nor 'unknown'")
+    return {"gas": gas}
 
 
 def world_model(text):
@@ -220,7 +246,7 @@ def world_sources(args):
 
     spec = None
     if args.world is not None:
-        from ..sim import load_world
+        from ..sim import check_free_cells, load_world
 
         spec = load_world(args.world)
     names = args.sources
@@ -228,6 +254,8 @@ def world_sources(args):
         names = list(spec.sources) if spec is not None else list(DEFAULT_SOURCES)
         if not names:
             raise ValueError(f"{args.world}: the world file names no 'sources'; give --sources")
+    if spec is not None:
+        check_free_cells(spec)  # a map too fine for the runs' memory: one line naming 'resolution', nothing run
     return spec, names, [parse_source(s) for s in names]
 
 

@@ -20,6 +20,8 @@ from pathlib import Path
 from . import _benchmark, _export, _live, _replay, _search, _world
 from ._grid import (
     MAX_SEEDS,
+    add_gas_argument,
+    gas_setting,
     add_missed_hits_argument,
     missed_hit_rate,
     add_ontology_argument,
@@ -99,7 +101,7 @@ def _experiment(args) -> int:
 
     seeds = split_seeds(args)  # a bad --first-seed or a test split with one: one line, exit 2, nothing written
     spec, names, sources = world_sources(args)
-    gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
+    gas = gas_setting(args, spec)  # --gas, else the world file's; a gas the ontology lacks: exit 2
     config = ExperimentConfig(stops=args.stops, off_ontology=args.off_ontology,
                               missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
                               world_model=world_model(args.world_model), **gas)
@@ -218,6 +220,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(prog="psgsl", description="Probabilistic semantic gas source localization. "
                                      "Without a command: the demo.")
+    parser.add_argument("--quiet", dest="top_quiet", action="store_true",
+                        help="no progress bar (before a command: the same as that command's --quiet)")
     sub = parser.add_subparsers(dest="command")
 
     demo = sub.add_parser("demo", help="the validation experiment in small, then a small closed-loop "
@@ -237,6 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_ontology_argument(exp)
     add_missed_hits_argument(exp)
     add_world_model_argument(exp)
+    add_gas_argument(exp)
     add_workers_argument(exp)
     exp.add_argument("--out", default="psgsl-experiment", help="output directory (default: %(default)s)")
     add_scheduler_argument(exp)
@@ -280,8 +285,10 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)  # argparse prints usage + one line and exits 2 on bad syntax
     if args.command is None:
-        argv = ["demo"]
+        argv = ["demo"] + (["--quiet"] if args.top_quiet else [])
         args = parser.parse_args(argv)
+    elif args.top_quiet:
+        args.quiet = True  # psgsl --quiet COMMAND: the command's own --quiet
     args.argv = argv  # for the resume hint after Ctrl-C
     from ..runs._runner import command_label
 

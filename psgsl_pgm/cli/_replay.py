@@ -34,6 +34,14 @@ def role_topic(text: str):
     return role.strip(), topic.strip()
 
 
+def conversion(text: str):
+    """``SCALE[,OFFSET]`` -> (scale, offset)."""
+    parts = text.split(",")
+    if len(parts) not in (1, 2):
+        raise ValueError(f"expected SCALE[,OFFSET], got {text!r}")
+    return float(parts[0]), float(parts[1]) if len(parts) == 2 else 0.0
+
+
 def add_parser(subparsers):
     """Register ``psgsl replay``."""
     from ..experiment import ESTIMATORS
@@ -59,9 +67,13 @@ def add_parser(subparsers):
     p.add_argument("--threshold", type=float, default=None, metavar="PPM",
                    help="gas hit threshold, a hit when reading >= PPM (default: a psgsl-recorded bag's, else the "
                    "sensor model's 1 ppm)")
+    p.add_argument("--gas-conversion", type=conversion, default=None, metavar="SCALE[,OFFSET]",
+                   help="the gas readings in ppm are SCALE × raw + OFFSET (needed when the GasSensor messages are in "
+                   "a unit other than ppm or ppb, e.g. a MOX sensor in ohms)")
     p.add_argument("--bag-map", action="store_true", help="use the bag's nav_msgs/OccupancyGrid as the house (no "
                    "rooms or objects; a source may be in any free cell) instead of the world's map")
     p.add_argument("--out", default=None, help="output directory (required unless --list)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
 
@@ -82,14 +94,25 @@ def run(args) -> int:
     from ..io._output import check_output_dir
 
     check_output_dir(args.out)  # an unwritable --out fails now, before the bag is read; creates nothing
-    res = replay(args.bag, world=args.world, source=args.source, estimator=args.estimator, seed=args.seed,
-                 topics=dict(args.topics), map_frame=args.map_frame, robot_frame=args.robot_frame,
-                 tolerance=args.tolerance, threshold=args.threshold, bag_map=args.bag_map)
+    bar = _Bar(not getattr(args, "quiet", False))
+    try:
+        res = replay(args.bag, world=args.world, source=args.source, estimator=args.estimator, seed=args.seed,
+                     topics=dict(args.topics), map_frame=args.map_frame, robot_frame=args.robot_frame,
+                     tolerance=args.tolerance, threshold=args.threshold, bag_map=args.bag_map,
+                     gas_conversion=args.gas_conversion, progress=bar)
+    finally:
+        bar.close()
     run_ = res.run
     print(f"psgsl replay: {args.bag}: {run_.n_steps} gas readings ({int(run_.hit.sum())} hits at >= "
           f"{run_.config['threshold']:g} ppm), {res.n_frames} detection frames"
           + (f", {res.skipped} detections of unknown classes skipped" if res.skipped else "")
           + f"; topics {', '.join(f'{k}={v}' for k, v in res.bag.topics.items() if v)}")
+    outside = {k: v for k, v in res.bag.skipped.items() if v}
+    if outside:
+        print("  skipped outside the overlap of the streams: "
+              + ", ".join(f"{v} {k} message{'s' if v > 1 else ''}" for k, v in outside.items()))
+    for text in res.assumptions:
+        print(f"  {text}")
     from ..experiment import VARIANTS
 
     for v, name in enumerate(VARIANTS):
@@ -98,6 +121,25 @@ def run(args) -> int:
     written = write_replay(res, args.out)
     print(f"written to {args.out}: {', '.join(p.name for p in written)}")
     return 0
+
+
+class _Bar:
+    """``progress(done, total)`` for :func:`replay`: a tqdm bar on stderr over the gas readings (none when quiet)."""
+
+    def __init__(self, show: bool):
+        self._show, self._bar, self._done = show, None, 0
+
+    def __call__(self, done: int, total: int) -> None:
+        if self._bar is None:
+            from ..runs._runner import _progress_bar
+
+            self._bar = _progress_bar(total, "gas readings", self._show, unit="reading")
+        self._bar.update(done - self._done)
+        self._done = done
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
 
 
 def _list(args) -> int:

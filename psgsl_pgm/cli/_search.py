@@ -11,6 +11,7 @@ from ._grid import (
     add_end_argument,
     add_split_arguments,
     add_found_arguments,
+    add_gas_argument,
     add_missed_hits_argument,
     missed_hit_rate,
     add_ontology_argument,
@@ -23,6 +24,7 @@ from ._grid import (
     positive_float,
     positive_int,
     seed_count,
+    gas_setting,
     world_model,
     world_sources,
 )
@@ -60,6 +62,7 @@ def add_parser(subparsers):
     add_ontology_argument(p)
     add_missed_hits_argument(p)
     add_world_model_argument(p)
+    add_gas_argument(p)
     add_workers_argument(p)
     add_scheduler_argument(p)
     p.add_argument("--out", default="psgsl-search", help="output directory (default: %(default)s)")
@@ -146,7 +149,7 @@ def _run(args) -> int:
     # exit 2, nothing written
     seeds = split_seeds(args)
     spec, _, sources = world_sources(args)  # a bad world file or source: one line, exit 2, nothing written
-    gas = {"gas": spec.gas} if spec is not None and spec.gas else {}
+    gas = gas_setting(args, spec)  # --gas, else the world file's; a gas the ontology lacks: exit 2
     config = ExperimentConfig(off_ontology=args.off_ontology, missed_hit_rate=missed_hit_rate(args.missed_hit_rate),
                               world_model=world_model(args.world_model), **gas)
     clearance = args.clearance if args.clearance is not None or spec is None else spec.clearance

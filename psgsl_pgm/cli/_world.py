@@ -117,6 +117,14 @@ def format_summary(s: dict) -> str:
         lines.append(f"target gas: {s['gas']}")
     if s["semantic_map"] is not None:
         lines.append(f"semantic map: class beliefs of shape {tuple(s['semantic_map'])} (replaces the camera)")
+    elif not s["objects"]:
+        lines.append("warning: the world lists no objects: the camera variants (semantics, semantics+rooms) will see "
+                     "nothing and keep their priors (give an 'objects' file, or a 'semantic_map')")
+    from ..sim import MAX_FREE_CELLS
+
+    if g["free_cells"] > MAX_FREE_CELLS:
+        lines.append(f"warning: {g['free_cells']:,} free cells: search, experiment, benchmark and replay refuse maps "
+                     f"of more than {MAX_FREE_CELLS:,} (their memory); set a coarser 'resolution' for them")
     return "\n".join(lines)
 
 

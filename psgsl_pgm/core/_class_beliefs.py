@@ -309,7 +309,7 @@ class ClassBeliefMap:
 
     # --- the semantic term ----------------------------------------------------------------------------------
     def source_probability(self, source_likelihood, class_prior, **options) -> np.ndarray:
-        """p(s_c | z) over the 2-D cells (eq. ``prob-semantics-final``); voxel columns are summed (Sec.
+        """p(s_c | z) over the 2-D cells (eq. (20)); voxel columns are summed (Sec.
         "Voxelized Scene Representations"). Options as for :func:`psgsl_pgm.semantic_source_probability`."""
         if self.is_voxel:
             options = {"column_axis": 2} | options

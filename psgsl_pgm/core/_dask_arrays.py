@@ -4,7 +4,7 @@ r"""Semantic maps larger than memory: the core functions on dask arrays chunked 
 :func:`psgsl_pgm.semantic_information_gain` dispatch here (one test at their top, :func:`is_dask_array`)
 when an input is a ``dask.array.Array``; they then return a lazy dask array of the cells' shape, chunked like
 the input. The class beliefs are never materialised: every chunk goes through the kernels of the numpy path
-(eq. ``prob-semantics-final`` per chunk), and whatever couples the cells — the normaliser of p(s | z), the
+(eq. (20) per chunk), and whatever couples the cells — the normaliser of p(s | z), the
 log-sum-exp of :func:`fuse`, the normaliser U and the entropy H(S) of the information gain — is a global dask
 reduction. Only cell-sized intermediates (1/k of the beliefs: weights, log-posteriors) wait for a reduction;
 dask spills them to disk if a worker's memory runs short. The information gain needs the beliefs twice and

@@ -1,4 +1,4 @@
-"""Fusion of posteriors over the same cells: eq. ``combined-conditionals`` and its general form."""
+"""Fusion of posteriors over the same cells: eq. (11) and its general form."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ def fuse(*posteriors, prior=None):
 
     .. math:: p(s_c | e_1, \dots, e_m) \propto \frac{\prod_j p(s_c | e_j)}{p(s_c)^{m-1}},
 
-    which for a uniform prior and m = 2 is eq. ``combined-conditionals``,
+    which for a uniform prior and m = 2 is eq. (11),
     p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z). Computed in linear space by compiled passes that also validate
     the inputs: for two inputs one pass forms the normaliser and a second writes the result (no temporary);
     for more, one pass per input builds the product. The cells whose product would leave float64's normal
@@ -81,7 +81,7 @@ def fuse(*posteriors, prior=None):
         pr = np.ascontiguousarray(pr).reshape(-1)
 
     if len(flat) == 2:
-        # eq. combined-conditionals in two passes and no temporary: T = Σ_c p(s_c|g) p(s_c|z) / p(s_c)
+        # eq. (11) in two passes and no temporary: T = Σ_c p(s_c|g) p(s_c|z) / p(s_c)
         # (and the checks of both inputs), then p_c / T written once, in the output's dtype
         st_a, st_b, unsafe, total, zero_support = fuse_sum(flat[0], flat[1], pr, extra)
         _check_inputs(arrays, [st_a, st_b])

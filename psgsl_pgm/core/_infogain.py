@@ -2,7 +2,7 @@ r"""Semantic information gain I(S; O_n) for every cell at once (Sec. "Informatio
 
 Derivation (checked in ``proofs/check_information_gain.py``). Let the current source distribution be the
 fusion P(c) = f_c w_c / U of an olfactory posterior f with the semantic weights w_c = q_c · ρ
-(eq. ``prob-semantics-final``, ρ from :mod:`psgsl_pgm.core._ratios`), U = Σ_c f_c w_c. Learning O_n = i removes
+(eq. (20), ρ from :mod:`psgsl_pgm.core._ratios`), U = Σ_c f_c w_c. Learning O_n = i removes
 cell n's uncertain factor: in Network A, p(O_n = i, z_n | S = c) / p(z_n | ¬s_n) is q_ni for c ≠ n and
 q_ni ρ_i for c = n, so *only cell n's weight changes*, from f_n w_n to f_n ρ_i. With a_n = f_n / U and
 
@@ -53,7 +53,7 @@ def semantic_information_gain(
 
     .. math:: I(S; O_n) = H(S) - \sum_i p(o_{ni} | \cdot)\, H(S | o_{ni})
 
-    where S's current distribution is the fusion (eq. ``combined-conditionals``) of ``olfactory`` with the
+    where S's current distribution is the fusion (eq. (11)) of ``olfactory`` with the
     semantic term of :func:`semantic_source_probability`. The posterior after observing O_n only rescales
     cell n's weight, which gives all n cells in O(n·k) total (see the module docstring for the formulas).
 

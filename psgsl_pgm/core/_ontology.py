@@ -139,7 +139,7 @@ class Ontology:
             .. math:: p_\varepsilon(o_{ci} | s_c, \gamma) = (1 - \varepsilon)\, p(o_{ci} | s_c, \gamma)
                       + \varepsilon\, p(o_{ci} | \neg s_c),
 
-            so eq. ``prob-semantics-final`` with this likelihood is exact for the mixture (in Network A with
+            so eq. (20) with this likelihood is exact for the mixture (in Network A with
             background β = :attr:`class_prior`, as without ε). The semantic weight of a cell becomes
             (1 − ε) Σ_i p(o_ci | z_c) p(o_ci | s_c) / p(o_ci) + ε: no cell falls below ε times the weight of a
             cell the camera has not seen, so an object-free source cell keeps mass that the gas can raise.

@@ -331,9 +331,9 @@ class SemanticGSLProblem:
     def closed_form_posterior(self, *, class_prior="background") -> np.ndarray:
         """(n,) p(s_c | g, z, ζ) by the paper's closed form, through the core library.
 
-        ``fuse(p(s | g), p(s | z, ζ), prior=p(s))`` (eq. ``combined-conditionals``) with
+        ``fuse(p(s | g), p(s | z, ζ), prior=p(s))`` (eq. (11)) with
         p(s | z, ζ) = ``semantic_source_probability(q, L, ρ, gas_probs=p(γ | ζ), source_prior=p(s))``
-        (eq. ``prob-semantics-final`` and its gas mixture), q = p(o_c | z_c) computed under ρ.
+        (eq. (20) and its gas mixture), q = p(o_c | z_c) computed under ρ.
 
         Parameters
         ----------

@@ -1,6 +1,6 @@
 """The ontology side of the semantic term: validated p(o | s, γ), p(γ | ζ) and p(o), reduced to one k-vector.
 
-Eq. ``prob-semantics-final`` and its gas-mixture form (Sec. "Probabilistic Gas Classification") are linear in
+Eq. (20) and its gas-mixture form (Sec. "Probabilistic Gas Classification") are linear in
 the class beliefs:
 
     p(s_c | z, ζ) ∝ Σ_γ p(γ | ζ) Σ_i p(o_ci | z_c) / p(o_ci) · p(o_ci | s_c, γ) = p(o_c | z_c) · ρ

@@ -1,4 +1,4 @@
-"""The semantic term p(s_c | z): eq. ``prob-semantics-final``, its gas mixture and its voxel columns."""
+"""The semantic term p(s_c | z): eq. (20), its gas mixture and its voxel columns."""
 
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def semantic_source_probability(
 ):
     r"""Probability of the source being in each cell given the semantic map alone, p(s_c | z).
 
-    Implements eq. ``prob-semantics-final``,
+    Implements eq. (20),
 
     .. math:: p(s_c | z) \propto \sum_i \frac{p(o_{ci} | z_c)}{p(o_{ci})}\, p(o_{ci} | s_c),
 

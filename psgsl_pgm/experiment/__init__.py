@@ -19,10 +19,11 @@ from ._calibration import (CALIBRATION_RUNS, COVERAGE_RUNS, GRID_AXES, GRID_CALI
                            CoverageTempering, calibrate, calibrate_encounter_scale, calibration_runs,
                            coverage_tempering, coverage_threshold, coverage_thresholds, parameter_grid_weights,
                            tempered_posterior)
-from ._config import ESTIMATORS, PARAMETER_GRID, VARIANTS, ExperimentConfig, parse_source
+from ._config import ESTIMATORS, PARAMETER_GRID, UNKNOWN_GAS, VARIANTS, ExperimentConfig, parse_source
 from ._driver import DEMO_SEEDS, run_demo, run_experiment, write_outputs
 from ._figures import plot_error_chart, plot_progression, plot_room_types
 from ._metrics import error_and_spread, mean_ci
+from ._robot_models import robot_gas_confusion
 from ._reliability import plot_reliability, reliability_table
 from ._replay import ReplayResult, replay, write_replay
 from ._run import RunResult, run_search
@@ -46,6 +47,7 @@ __all__ = [
     "ReplayResult",
     "RunResult",
     "Tour",
+    "UNKNOWN_GAS",
     "VARIANTS",
     "VariantPosteriors",
     "calibrate",
@@ -59,6 +61,7 @@ __all__ = [
     "exploration_tour",
     "format_table",
     "house_ontology",
+    "robot_gas_confusion",
     "load_run",
     "mean_ci",
     "parameter_grid_weights",

@@ -10,8 +10,8 @@ from .._shared._validate import positive, real_pair
 from ..olfaction._infotaxis import _parameter_grid
 from ..runs._key import OMIT_DEFAULT
 
-__all__ = ["ESTIMATORS", "ESTIMATOR_NAMING", "ExperimentConfig", "PARAMETER_GRID", "VARIANTS", "parse_source",
-           "stored_estimator_name"]
+__all__ = ["ESTIMATORS", "ESTIMATOR_NAMING", "ExperimentConfig", "PARAMETER_GRID", "UNKNOWN_GAS", "VARIANTS",
+           "parse_source", "stored_estimator_name"]
 
 #: The three variants of the paper's Fig. error-chart, in the order they are reported.
 VARIANTS = ("olfaction", "semantics", "semantics+rooms")
@@ -40,6 +40,10 @@ def stored_estimator_name(name: str, naming) -> str:
         return _LEGACY_NAMES.get(name, name)
     return name
 
+
+#: The ``gas`` of a run whose gas the robot is not told (:class:`ExperimentConfig`).
+UNKNOWN_GAS = "unknown"
+
 #: (D m²/s, τ s, κ m²/s, weight) of the plume parameters marginalised by the grid Infotaxis estimator
 #: (:attr:`ExperimentConfig.parameter_grid`), fitted by :func:`psgsl_pgm.experiment.calibrate`.
 PARAMETER_GRID = ((0.004, 284.0, 0.821, 0.308), (0.0131, 284.0, 0.821, 0.597), (0.04, 284.0, 1.642, 0.096))
@@ -59,6 +63,9 @@ class ExperimentConfig:
     ----------
     gas : str
         Target gas γ (a gas of :func:`house_ontology`); its source likelihood p(o | s, γ) drives the semantic term.
+        ``"unknown"`` (:data:`UNKNOWN_GAS`): the episode's gas is drawn from the ontology's gases and not told to
+        the robot, which infers it from its electronic nose and uses the gas mixture of the semantic term
+        (:class:`psgsl_pgm.experiment.VariantPosteriors`).
     warm_up : float
         Seconds of release before the robot starts (the plume develops).
     speed : float
@@ -99,7 +106,7 @@ class ExperimentConfig:
         weights fitted on the calibration runs (:func:`calibrate`: the marginal maximum-likelihood mixing
         distribution of the run-level θ on the grid D ∈ {0.004, 0.0131, 0.04} m²/s × τ = 284 s ×
         κ ∈ {0.41, 0.821, 1.64} m²/s at the tempering β, components below 10⁻³ dropped, weights to three
-        digits; :data:`PARAMETER_GRID`). ``None`` (the default): the single (D, τ, κ) above. PMFS uses the
+        digits; :data:`PARAMETER_GRID`). ``None`` (the default): the single (D, τ, κ) above. The analytic-plume estimator uses the
         single (D, τ, κ) either way. The grid is not the default: on held-out seeds it brings the final coverage
         of the 90 % region into 0.80–0.97 in 5 of the 9 Infotaxis cells of the fixed tour (3 with the single
         fit), not in all, and costs about 5× the estimator's time per reading.
@@ -192,6 +199,23 @@ class ExperimentConfig:
 def parse_source(spec) -> str | tuple:
     """A source specification: an object class name (``"oven"``: the centre of the house's first oven) or a
     position ``"x,y"`` in metres (a string or a pair of numbers).
+
+    Parameters
+    ----------
+    spec : str or (2,) array_like of float
+        ``"oven"``, ``"2.5,6.0"`` or ``(2.5, 6.0)``.
+
+    Returns
+    -------
+    str or (2,) tuple of float
+        The class name, or the position (x, y) in metres.
+
+    Raises
+    ------
+    TypeError
+        Neither a string nor a pair of numbers (bytes, a boolean, a complex number).
+    ValueError
+        An empty string, a single number, or a position that does not read as two finite numbers.
 
     Examples
     --------

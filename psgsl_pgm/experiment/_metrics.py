@@ -1,5 +1,5 @@
 """The paper's metrics (Sec. "Validation"), the calibration of the declared credible regions, and confidence
-intervals over runs."""
+intervals over runs (a mean's, a success rate's)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from .._shared._validate import (
 )
 
 __all__ = ["CALIBRATION_POINTS", "calibration_summary", "credible_region", "error_and_spread", "hpd_level", "mean_ci",
-           "at_fractions"]
+           "at_fractions", "wilson_interval"]
 
 
 def error_and_spread(posteriors, centres, truth):
@@ -284,3 +284,45 @@ def _scale_free(compute, arrays, scale):
         again = compute(*(a / s for a in arrays))
         ok = np.logical_and.reduce([np.isfinite(o) for o in out])
         return tuple(np.where(ok, o, r * s)[()] for o, r in zip(out, again))
+
+
+def _wilson(p: float, n: float, level: float) -> list:
+    """Wilson score interval of a proportion ``p`` observed on ``n`` (possibly effective, non-integer) trials."""
+    z = stats.norm.ppf(0.5 + level / 2)
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    lo = 0.0 if p == 0 else max(0.0, centre - half)
+    hi = 1.0 if p == 1 else min(1.0, centre + half)
+    return [float(lo), float(hi)]
+
+
+def wilson_interval(successes: int, n: int, *, level: float = 0.95) -> list:
+    """Wilson score interval of a binomial proportion, [lo, hi].
+
+    Never a point: at 0 or n successes it is [0, hi] or [lo, 1] with hi > 0, lo < 1 (the same interval as
+    ``scipy.stats.binomtest(successes, n).proportion_ci(method="wilson")``; Wilson, *JASA* 22, 209-212, 1927).
+
+    Parameters
+    ----------
+    successes : int
+        Number of successes, 0 ≤ ``successes`` ≤ ``n``.
+    n : int
+        Number of trials; below 1 there is no interval.
+    level : float, keyword-only
+        Confidence level, in (0, 1).
+
+    Returns
+    -------
+    list of float
+        ``[lo, hi]``, within [0, 1]; ``[nan, nan]`` when ``n`` < 1.
+
+    Examples
+    --------
+    >>> [round(x, 4) for x in wilson_interval(8, 10)]
+    [0.4902, 0.9433]
+    >>> [round(x, 4) for x in wilson_interval(10, 10)]
+    [0.7225, 1.0]
+    """
+    if n < 1:
+        return [float("nan"), float("nan")]
+    return _wilson(successes / n, n, level)

@@ -72,7 +72,7 @@ class EpisodeRecorder:
         Only a world with the thresholded :class:`psgsl_pgm.sim.GasSensor` can be recorded: the bag holds one value
         per reading and ``psgsl replay`` thresholds it; a sensor whose hits the robot decides from the window's
         samples (:class:`psgsl_pgm.sim.MOXSensor`, :class:`psgsl_pgm.sim.PIDSensor`) is a ValueError before
-        anything is written.
+        anything is written. So is a world with an electronic nose (a run whose gas the robot is not told).
         """
         from ..sim import GasSensor
 
@@ -81,6 +81,9 @@ class EpisodeRecorder:
             raise ValueError(f"--record needs the world's thresholded GasSensor, got a {kind} "
                              "(its hits are decided by the robot from each reading's samples, which a bag does not "
                              "hold)")
+        if getattr(world, "enose", None) is not None:  # a bag has no message for the e-nose's classifications
+            raise ValueError("--record cannot record a run whose gas is unknown to the robot: a bag holds no "
+                             "electronic-nose readings, and its replay would not infer the gas")
         self._world = world
         self._t0 = world.time
         return _Watched(world, self)
@@ -112,12 +115,17 @@ class EpisodeRecorder:
 
     def step(self, posteriors, beliefs, *, chosen=None) -> None:
         """After a step: the variants' posteriors (V, H, W), the most likely class per cell of the first
-        class-belief map, and the pose chosen next (3,) if any."""
+        class-belief map (none when the variants keep no class beliefs, as the olfaction variant alone), and the
+        pose chosen next (3,) if any."""
         self.step_t.append(float(self._world.time))
         self.posteriors.append(np.asarray(posteriors, dtype=self._dtype))
-        probs = next(iter(beliefs.maps.values())).probs
-        cells = probs if probs.ndim == 3 else probs.max(axis=2)  # a voxel column: its most certain voxel
-        self.best_class.append(np.argmax(cells, axis=-1).astype(np.uint8))
+        first = next(iter(beliefs.maps.values()), None)
+        if first is None:
+            self.best_class.append(None)
+        else:
+            probs = first.probs
+            cells = probs if probs.ndim == 3 else probs.max(axis=2)  # a voxel column: its most certain voxel
+            self.best_class.append(np.argmax(cells, axis=-1).astype(np.uint8))
         self.chosen.append(np.full(3, np.nan) if chosen is None else np.asarray(chosen, dtype=np.float64))
 
     def choose(self, pose) -> None:
@@ -140,7 +148,8 @@ class EpisodeRecorder:
             frame_cells=self.frame_cells, frame_labels=self.frame_labels, objects=objects,
             classes=tuple(world.detector.classes), variants=tuple(variants), step_t=np.array(self.step_t) - t0,
             posteriors=np.stack(self.posteriors) if self.posteriors else None,
-            best_class=np.stack(self.best_class) if self.best_class else None,
+            best_class=(np.stack(self.best_class) if self.best_class and all(b is not None for b in self.best_class)
+                        else None),
             chosen=np.stack(self.chosen) if self.chosen else None,
             threshold=float(world.gas_sensor.threshold), meta=meta)
 

@@ -33,7 +33,7 @@ def reliability_table(predicted, hits, *, bins=(0.0, 0.02, 0.05, 0.1, 0.2, 0.4, 
     >>> t["n"].tolist(), t["observed"].tolist()
     ([2, 2], [0.5, 1.0])
     """
-    from ..search._metrics import wilson_interval  # lazy: the search package imports the experiment's
+    from ._metrics import wilson_interval
 
     p = np.asarray(predicted, dtype=np.float64).ravel()
     g = np.asarray(hits).ravel()

@@ -3,11 +3,16 @@
 The bag (:func:`psgsl_pgm.ros.read_bag`) gives gas readings, wind readings, the robot's pose and camera
 detections on one clock. They become the steps of one run:
 
-* every gas reading is one step, at the robot's position at its stamp; it is a hit by the gas sensor's own
+* every gas reading is one step, at the robot's position at its stamp, in ppm: a ``GasSensor`` message's unit is
+  read from its ``raw_units`` (ppm as it is, ppb divided by 1000; any other unit — volt, ohm, … — is refused
+  unless the user gives a linear conversion ``ppm = scale × raw + offset``); a Float has no unit and is taken as
+  ppm (said in ``assumptions``). It is a hit by the gas sensor's own
   threshold rule (``value >= threshold``, :class:`psgsl_pgm.sim.GasSensor`; the world's sensor unless
   ``threshold`` is given);
 * its wind is the anemometer's reading interpolated to the same stamp (exact at an equal stamp; otherwise
-  linear between the readings around it, within the tolerance);
+  linear between the readings around it, within the tolerance). A bag without wind readings replays with none:
+  the estimators then assume still air (:data:`NO_WIND`, said in the result's ``assumptions``);
+* readings outside the overlap of the streams are skipped and counted (:attr:`psgsl_pgm.ros.BagData.skipped`);
 * the detection arrays stamped from this gas reading up to the next (those before the first reading go to the
   first step) are the step's camera frames: the camera looks from the array's frame; every free cell in its
   field of view (:class:`psgsl_pgm.sim.Camera`, the same as the simulator's) is "seen", labelled "nothing"
@@ -42,12 +47,17 @@ from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source, store
 from ._run import RunResult, run_config, step_metrics
 from ._step import VariantPosteriors
 
-__all__ = ["ReplayResult", "replay", "replay_frames", "replay_steps", "write_replay"]
+__all__ = ["NO_WIND", "ReplayResult", "replay", "replay_figure", "replay_frames", "replay_steps", "write_replay"]
+
+#: What the estimators assume when the bag holds no wind reading.
+NO_WIND = ("no wind readings: the estimators assume still air (the plume model's mean wind stays zero, so the "
+           "plume spreads by diffusion alone, and the analytic-plume estimator's hit kernel is round)")
 
 
 class ReplayResult(SimpleNamespace):
     """What :func:`replay` returns: ``run`` (RunResult), ``posteriors`` (list of (3, H, W) per step, when kept),
-    ``final`` (3, H, W), ``bag`` (BagData), ``house``, ``skipped`` (detections of unknown classes)."""
+    ``final`` (3, H, W), ``bag`` (BagData), ``house``, ``skipped`` (detections of unknown classes),
+    ``assumptions`` (list of str: what the estimators assumed for missing streams)."""
 
 
 def replay_frames(bag, house, detector: DetectorModel, camera: Camera):
@@ -110,8 +120,11 @@ def replay_steps(bag, frames, *, threshold: float, tolerance: float):
     """``[(t_ns, stop (2,), hit, value, wind (2,), [Frame, ...])]``, one per gas reading (module docstring)."""
     from ..ros._time import interpolate
 
-    where = f"{bag.path}: topic {bag.topics['wind']}"
-    wind = interpolate(bag.wind_t, bag.wind, bag.gas_t, tolerance=tolerance, where=where, describe=bag.describe)
+    if len(bag.wind_t):
+        where = f"{bag.path}: topic {bag.topics['wind']}"
+        wind = interpolate(bag.wind_t, bag.wind, bag.gas_t, tolerance=tolerance, where=where, describe=bag.describe)
+    else:  # no anemometer: no wind per step (the estimators' assumption is :data:`NO_WIND`)
+        wind = [None] * len(bag.gas_t)
     ft = np.array([t for t, _ in frames], dtype=np.int64)
     # frames stamped in [t_k, t_{k+1}) go to step k; frames before the first reading to step 0
     owner = np.maximum(np.searchsorted(bag.gas_t, ft, side="right") - 1, 0)
@@ -125,7 +138,7 @@ def replay_steps(bag, frames, *, threshold: float, tolerance: float):
 def replay(bag, *, world=None, source=None, estimator: str | None = None, config: ExperimentConfig | None = None,
            seed: int | None = None, topics=None, map_frame: str = "map", robot_frame: str = "base_link",
            tolerance: float | None = None, threshold: float | None = None, bag_map: bool = False,
-           keep_posteriors: bool = False) -> ReplayResult:
+           keep_posteriors: bool = False, gas_conversion=None, progress=None) -> ReplayResult:
     """Replay a ROS 2 bag through the estimators (see the module docstring).
 
     Parameters
@@ -158,6 +171,11 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         ontology and the gas.
     keep_posteriors : bool, keyword-only
         Keep every step's posteriors (float64) in the result.
+    gas_conversion : (2,) sequence of float, optional, keyword-only
+        ``(scale, offset)``: the readings in ppm are ``scale * raw + offset`` whatever the message's unit (needed
+        for a unit other than ppm or ppb, e.g. a MOX sensor's resistance in ohms); scale non-zero, both finite.
+    progress : callable, optional, keyword-only
+        ``progress(done, total)`` after every step (the command's progress bar).
 
     Returns
     -------
@@ -166,7 +184,9 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
     from ..ros import DEFAULT_TOLERANCE, read_bag
 
     tolerance = DEFAULT_TOLERANCE if tolerance is None else tolerance
+    conversion = _conversion(gas_conversion)
     data = read_bag(bag, topics=topics, map_frame=map_frame, robot_frame=robot_frame, tolerance=tolerance)
+    data, assumptions = _in_ppm(data, conversion)
     meta = data.meta
     if world is None and meta.get("world"):
         world = meta["world"]
@@ -197,6 +217,10 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         setting = dataclasses.replace(setting, fixed_house=house, source_region="free", class_beliefs=None,
                                       start=None, sources={})
     house = setting.house(int(seed))
+    if world is not None and not bag_map:
+        from ..sim import check_free_cells
+
+        check_free_cells(setting, int(seed))
     if source is None and meta.get("source") is not None:
         source = meta["source"]
     truth = None if source is None else setting.resolve_source(parse_source(source), house)
@@ -239,24 +263,61 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         beliefs.observe(np.asarray(stop, dtype=np.float64), SimpleNamespace(hit=hit), wind, fr)
         pos[k + 1], hits[k + 1], times[k + 1] = stop, hit, (t - t0) * 1e-9
         record(k + 1)
+        if progress is not None:
+            progress(k + 1, n)
     label = "unknown" if source is None else (source if isinstance(source, str) else f"{truth_xy[0]:g},{truth_xy[1]:g}")
     cfg = run_config(config, setting if world is not None else None)
     cfg.update(bag=str(data.path), topics=data.topics, threshold=threshold, tolerance=tolerance)
     run = RunResult(label, int(seed), estimator, truth_xy, times, pos, hits, err, spr, {n: post}, cfg, region_hit,
                     area, level)
+    if not len(data.wind_t):
+        assumptions.append(NO_WIND)
     return ReplayResult(run=run, posteriors=kept, final=post, bag=data, house=house, skipped=skipped,
-                        n_frames=len(frames))
+                        n_frames=len(frames), assumptions=assumptions)
+
+
+def _conversion(value):
+    """Validated ``(scale, offset)`` of ``gas_conversion`` (None: none given)."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise ValueError(f"gas_conversion must be (scale, offset), ppm = scale * raw + offset, got {value!r}")
+    try:
+        scale, offset = float(value[0]), float(value[1])
+    except (TypeError, ValueError):
+        raise TypeError(f"gas_conversion must hold two numbers (scale, offset), got {value!r}") from None
+    if not (np.isfinite(scale) and np.isfinite(offset) and scale != 0):
+        raise ValueError(f"gas_conversion must be a finite non-zero scale and a finite offset, got {value!r}")
+    return scale, offset
+
+
+def _in_ppm(data, conversion):
+    """``(data with its gas readings in ppm, assumptions)`` (see the module docstring)."""
+    units = data.gas_units
+    where = f"{data.path}: topic {data.topics['gas']}"
+    if conversion is not None:
+        scale, offset = conversion
+        gas = scale * data.gas + offset
+        if not np.isfinite(gas).all():
+            raise ValueError(f"{where}: the gas conversion {scale:g} × raw + {offset:g} gives a non-finite ppm")
+        return dataclasses.replace(data, gas=gas), []
+    if units == "ppm":
+        return data, []
+    if units == "ppb":
+        return dataclasses.replace(data, gas=data.gas / 1000.0), []
+    if units is None:
+        return data, [f"the gas topic's {data.topics['gas']} messages carry no unit: their values are taken as ppm"]
+    raise ValueError(f"{where}: the readings are in {units} (the GasSensor's raw_units), not ppm; give the "
+                     "conversion to ppm: --gas-conversion SCALE[,OFFSET] (ppm = SCALE × raw + OFFSET)")
 
 
 def write_replay(result: ReplayResult, out) -> list:
     """What ``psgsl experiment`` writes for one run, into ``out``: ``run.npz`` (:func:`save_run`), ``metrics.csv``,
     ``summary.json``, ``posterior-<variant>.npy`` (final, (H, W) float64), ``posterior.png`` (the final posteriors
-    with the path and the 90 % region) and, with a known source, ``error-chart.png``. Every file atomically."""
-    import matplotlib.pyplot as plt
-
+    with the path and the 90 % region, :func:`replay_figure`) and, with a known source, ``error-chart.png``. Every
+    file atomically."""
     from ..io._output import write_file_atomically
     from ._figures import plot_error_chart
-    from ._metrics import credible_region
     from ._store import save_run
     from ._summary import summarize, write_csv, write_summary
 
@@ -266,30 +327,55 @@ def write_replay(result: ReplayResult, out) -> list:
     written = [save_run(run, out / "run.npz"), write_csv([run], out / "metrics.csv")]
     summary = summarize([run]) if np.isfinite(run.source_xy).all() else {}
     summary.update(bag=str(result.bag.path), steps=run.n_steps, frames=result.n_frames,
-                   skipped_detections=result.skipped, final_spread=dict(zip(VARIANTS, map(float, run.spread[-1]))),
+                   skipped_detections=result.skipped, outside_overlap=dict(result.bag.skipped),
+                   assumptions=list(result.assumptions), final_spread=dict(zip(VARIANTS, map(float, run.spread[-1]))),
                    final_region_area=dict(zip(VARIANTS, map(float, run.region_area[-1]))))
     written.append(write_summary(summary, out / "summary.json"))
     for v, p in zip(VARIANTS, result.final):
         written.append(write_file_atomically(out / f"posterior-{v}.npy", lambda fh, p=p: np.save(fh, p)))
-    house = result.house
-    fig, axes = plt.subplots(1, len(VARIANTS), figsize=(4.2 * len(VARIANTS), 4.2), constrained_layout=True)
-    for ax, v, p in zip(np.atleast_1d(axes), VARIANTS, result.final):
-        ax.imshow(p, origin="lower", extent=house.grid.extent, cmap="magma")
-        ax.contour(credible_region(p, 0.9), levels=[0.5], colors="cyan", linewidths=0.8, origin="lower",
-                   extent=house.grid.extent)
-        ax.imshow(np.ma.masked_where(~house.grid.occupancy, house.grid.occupancy), origin="lower",
-                  extent=house.grid.extent, cmap="Greys", vmin=0, vmax=1.5, alpha=0.8)
-        ax.plot(run.position[1:, 0], run.position[1:, 1], "w-", lw=0.8)
-        if np.isfinite(run.source_xy).all():
-            ax.plot(*run.source_xy, "g*", ms=12)
-        ax.set_title(f"{v}: final p(s | …) and 90 % region")
     written.append(out / "posterior.png")
-    _savefig(fig, written[-1])
+    _savefig(replay_figure(result), written[-1])
     if np.isfinite(run.source_xy).all():
         fig = plot_error_chart([run])
         written.append(out / "error-chart.png")
         _savefig(fig, written[-1])
     return written
+
+
+def replay_figure(result: ReplayResult):
+    """The final posterior of every variant over the map: axes in metres, one colour bar per panel (p(s | …) per
+    cell), the 90 % credible region, the walls, the driven path, the start and, when known, the true source, with
+    a legend. Returns the matplotlib Figure."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    from ._metrics import credible_region
+
+    run, house = result.run, result.house
+    extent = house.grid.extent
+    fig, axes = plt.subplots(1, len(VARIANTS), figsize=(4.6 * len(VARIANTS), 4.4), constrained_layout=True)
+    for ax, v, p in zip(np.atleast_1d(axes), VARIANTS, result.final):
+        im = ax.imshow(p, origin="lower", extent=extent, cmap="magma")
+        fig.colorbar(im, ax=ax, shrink=0.8, label="p(s | …) per cell")
+        ax.contour(credible_region(p, 0.9), levels=[0.5], colors="cyan", linewidths=0.8, origin="lower",
+                   extent=extent)
+        ax.imshow(np.ma.masked_where(~house.grid.occupancy, house.grid.occupancy), origin="lower",
+                  extent=extent, cmap="Greys", vmin=0, vmax=1.5, alpha=0.8)
+        ax.plot(run.position[1:, 0], run.position[1:, 1], "w-", lw=0.8)
+        if run.n_steps:
+            ax.plot(*run.position[1], "wo", ms=5)
+        if np.isfinite(run.source_xy).all():
+            ax.plot(*run.source_xy, "g*", ms=12)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_title(f"{v}: final p(s | …)")
+    handles = [Line2D([], [], color="cyan", lw=0.8, label="90 % credible region"),
+               Line2D([], [], color="w", lw=0.8, marker="o", ms=5, markevery=[0], label="path (from its start)"),
+               Line2D([], [], color="0.6", lw=6, label="walls and furniture")]
+    if np.isfinite(run.source_xy).all():
+        handles.append(Line2D([], [], color="g", marker="*", ms=12, ls="", label="true source"))
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), facecolor="0.85")
+    return fig
 
 
 def _savefig(fig, path) -> None:

@@ -9,7 +9,7 @@ Data flow per stop (paper Secs. "Model" and "Validation"):
                                                                                 └──> p(s | g, z)   "semantics+rooms"
 
 The olfactory estimator is one object shared by the three variants, so they differ *only* in the semantic
-factor of eq. ``combined-conditionals``.
+factor of eq. (11).
 """
 
 from __future__ import annotations
@@ -163,6 +163,8 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     pos[0] = tour.stops[0]
     record(0)
     for j, stop, reading, wind, frames in walk(world, tour, config, camera=not beliefs.mapped):
+        if beliefs.gas_belief is not None:  # gas unknown: the e-nose names the gas of the same window
+            beliefs.observe_smell(world.sniff())
         beliefs.observe(stop, reading, wind, frames)
         pos[j + 1], hits[j + 1] = stop, reading.hit
         record(j + 1)

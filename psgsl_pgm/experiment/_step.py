@@ -23,17 +23,18 @@ import numpy as np
 from ..core._beliefs import room_evidence, update_class_probs
 from ..core._class_beliefs import ClassBeliefMap
 from ..core._fusion import fuse
+from ..core._gas_belief import GasBelief
 from ..core._semantic import semantic_source_probability
 from ..olfaction import (FilamentPMFS, GridInfotaxis, GrGSL, MeanWindEstimator, ParticleFilter, PlumeModel,
                          PMFSEstimator)
 from ..sim import default_world, match_names, reindex
-from ._config import ESTIMATORS, VARIANTS, ExperimentConfig, parse_source
-from ._robot_models import robot_detector_model, robot_hit_rule, wind_basis
+from ._config import ESTIMATORS, UNKNOWN_GAS, VARIANTS, ExperimentConfig, parse_source
+from ._robot_models import robot_detector_model, robot_gas_confusion, robot_hit_rule, wind_basis
 
 __all__ = ["VariantPosteriors", "make_estimator", "robot_hit_rule", "semantic_terms", "start_run", "visit"]
 
 
-def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
+def start_run(source, seed, estimator, config, *, world=None, world_spec=None, gas_type=None):
     """The checked settings and the world of one run (the fixed tour's or the closed loop's).
 
     Parameters
@@ -49,6 +50,9 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
         A prepared world (default: ``world_spec.make_world(seed, source, warm_up=config.warm_up)``).
     world_spec : psgsl_pgm.sim.WorldSpec, optional, keyword-only
         Default: the embedded house, :func:`psgsl_pgm.sim.default_world`.
+    gas_type : str, optional, keyword-only
+        With ``config.gas == "unknown"``: the episode's true gas (a gas of the ontology; e.g. the benchmark's
+        episode draw); default: drawn from the ontology's gases with ``seed`` (:func:`psgsl_pgm.sim.draw_gas`).
 
     Returns
     -------
@@ -58,6 +62,9 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
     setting : psgsl_pgm.sim.WorldSpec
         ``world_spec`` or the embedded house.
     world : psgsl_pgm.sim.World
+        With ``config.gas == "unknown"``: a world whose source emits a gas drawn from the ontology's gases with the
+        run's seed (:func:`psgsl_pgm.sim.draw_gas`), carrying an electronic nose
+        (:class:`psgsl_pgm.sim.ElectronicNose`); the robot is not told which gas.
     """
     config = ExperimentConfig() if config is None else config
     if not isinstance(config, ExperimentConfig):
@@ -68,18 +75,30 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None):
         raise TypeError(f"seed must be an integer, got {seed!r}")
     spec = parse_source(source)
     setting = default_world() if world_spec is None else world_spec
+    if gas_type is not None and config.gas != UNKNOWN_GAS:
+        raise ValueError(f"gas_type names the true gas of a run whose gas is unknown to the robot; config.gas is "
+                         f"{config.gas!r}, not {UNKNOWN_GAS!r}")
+    if gas_type is not None and gas_type not in setting.ontology.gases:
+        raise ValueError(f"gas_type must be one of the ontology's gases {setting.ontology.gases}, got {gas_type!r}")
     if world is None:
-        world = setting.make_world(int(seed), spec, warm_up=config.warm_up, model=config.world_model)
+        extra = {}
+        if config.gas == UNKNOWN_GAS:  # the episode's gas, drawn from the ontology's and not told to the robot
+            from ..sim import ElectronicNose, draw_gas
+
+            gas = draw_gas(setting.ontology.gases, int(seed)) if gas_type is None else gas_type
+            extra = {"enose": ElectronicNose(), "gas_type": gas}
+        world = setting.make_world(int(seed), spec, warm_up=config.warm_up, model=config.world_model, **extra)
     return config, spec, setting, world
 
 
-def semantic_terms(maps, likelihood, class_prior):
-    """p(s | z) of each class-belief map (eq. ``prob-semantics-final``); (len(maps), H, W).
+def semantic_terms(maps, likelihood, class_prior, *, gas_probs=None):
+    """p(s | z) of each class-belief map (eq. (20)); (len(maps), H, W).
 
     Voxel maps (H, W, L, k) are reduced to columns, p(s_c | z) = Σ_{v ∈ c} p(s_v | z) (Sec. "Voxelized Scene
-    Representations").
+    Representations"). With ``gas_probs`` = p(γ | ζ) and an (m, k) ``likelihood`` p(o | s, γ): the gas mixture
+    p(s | z, ζ) = Σ_γ p(γ | ζ) p(s | z, γ) (Sec. "Probabilistic Gas Classification").
     """
-    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior,
+    return np.stack([semantic_source_probability(m.probs, likelihood, class_prior, gas_probs=gas_probs,
                                                  column_axis=2 if m.probs.ndim == 4 else None) for m in maps])
 
 
@@ -158,7 +177,12 @@ class VariantPosteriors:
         ``{"semantics": ClassBeliefMap, "semantics+rooms": ClassBeliefMap}`` (the core's class beliefs, in
         the detector's class order decided here, once), for the semantic variants among ``variants``.
     likelihood, class_prior : (k,) ndarray
-        p(o | s, γ) and β = p(o | ¬s) in the detector's class order.
+        p(o | s, γ) and β = p(o | ¬s) in the detector's class order; with the gas unknown (``config.gas ==
+        "unknown"``) ``likelihood`` is the (m, k) table of every gas of the ontology.
+    gas_belief : psgsl_pgm.GasBelief or None
+        With the gas unknown: p(γ | ζ_1:t) from the e-nose's classifications (:meth:`observe_smell`), with the
+        confusion counted on reference exposures (:func:`psgsl_pgm.experiment.robot_gas_confusion`); None when
+        the gas is told.
     model : PlumeModel
         The plume model in use (re-solved when the wind estimate moves, see :meth:`observe`).
     wind : psgsl_pgm.olfaction.MeanWindEstimator
@@ -181,14 +205,20 @@ class VariantPosteriors:
         setting = default_world() if setting is None else setting
         house = world.house
         ontology = setting.ontology
-        if config.gas not in ontology.gases:
-            raise ValueError(f"gas must be one of the ontology's gases {ontology.gases}, got {config.gas!r}")
+        unknown = config.gas == UNKNOWN_GAS
+        if not unknown and config.gas not in ontology.gases:
+            raise ValueError(f"gas must be one of the ontology's gases {ontology.gases} or {UNKNOWN_GAS!r}, got "
+                             f"{config.gas!r}")
         classes = world.detector.classes
         order = match_names(classes, ontology.classes)
         if (order < 0).any():
             raise ValueError(f"the detector's classes {classes} are not all in the ontology {ontology.classes}")
         # p(o | s, γ) in the detector's order (with ε = config.off_ontology of off-ontology sources mixed in)
-        self.likelihood = ontology.source_likelihood(config.gas, off_ontology=config.off_ontology)[order]
+        self.likelihood = ontology.source_likelihood(None if unknown else config.gas,
+                                                     off_ontology=config.off_ontology)[..., order]
+        self.gas_belief = None
+        if unknown:  # p(γ | ζ_1:t), uniform before the first classified reading
+            self.gas_belief = GasBelief(ontology.gases, *robot_gas_confusion(tuple(ontology.gases)))
         self.class_prior = beta = ontology.class_prior[order]  # β = p(o | ¬s)
         room_table = ontology.room_table[:, order]
         room_table = room_table / room_table.sum(axis=1, keepdims=True)
@@ -253,15 +283,29 @@ class VariantPosteriors:
     def observe(self, stop, reading, wind, frames) -> None:
         """Assimilate one stop: the anemometer reading into the wind estimate (re-solving the plume on schedule),
         the gas reading into p(s | g), every frame — read with the robot's detector model — into both
-        class-belief maps."""
-        self.wind.add(stop, wind)
-        self._refresh_wind()
+        class-belief maps. ``wind`` None (a robot without an anemometer): the wind estimate keeps what it had (the
+        still-air plume without any reading) and the estimator gets no wind."""
+        if wind is not None:
+            self.wind.add(stop, wind)
+            self._refresh_wind()
         self.estimator.update(stop, reading.hit, wind)
         for frame in frames if self.maps else ():
             if self.detector_model is not None:  # the labels read with the robot's model of its detector
                 frame = replace(frame, likelihood=self.detector_model.likelihood(frame.labels, frame.distance))
             for m in self.maps.values():  # the same frames for both maps: one observation stream
                 m.observe(frame)
+
+    @property
+    def gas_probs(self):
+        """(m,) p(γ | ζ_1:t), the weight of the semantic term's gas mixture; None when the gas is told."""
+        return None if self.gas_belief is None else self.gas_belief.probs
+
+    def observe_smell(self, smell) -> None:
+        """Assimilate one e-nose classification (a :class:`psgsl_pgm.sim.Smell`) into p(γ | ζ_1:t): a reading
+        named as a gas outside the ontology, or not named, changes nothing (the confusion is counted among the
+        ontology's gases). Nothing to do when the gas is told."""
+        if self.gas_belief is not None and smell.label in self.gas_belief.gases:
+            self.gas_belief.update(smell.label, smell.strength)
 
     def condition(self, log_likelihood) -> None:
         """Condition p(s | g) on an observation of s other than a gas reading (the closed loop's "not found
@@ -273,7 +317,7 @@ class VariantPosteriors:
         """p(s | z) of a semantic variant, (H, W)."""
         if variant not in self.maps:
             raise ValueError(f"variant must be one of the semantic variants kept, {tuple(self.maps)}, got {variant!r}")
-        return semantic_terms([self.maps[variant]], self.likelihood, self.class_prior)[0]
+        return semantic_terms([self.maps[variant]], self.likelihood, self.class_prior, gas_probs=self.gas_probs)[0]
 
     def posteriors(self, variants=VARIANTS) -> np.ndarray:
         """(len(variants), H, W) posterior of each variant now."""
@@ -283,5 +327,5 @@ class VariantPosteriors:
         p_g = self.estimator.posterior  # p(s | g)
         semantic = [v for v in variants if v != "olfaction"]
         p_z = dict(zip(semantic, semantic_terms([self.maps[v] for v in semantic], self.likelihood,
-                                                self.class_prior))) if semantic else {}
+                                                self.class_prior, gas_probs=self.gas_probs))) if semantic else {}
         return np.stack([p_g if v == "olfaction" else fuse(p_g, p_z[v]) for v in variants])  # p(s|g,z) ∝ p(s|g) p(s|z)

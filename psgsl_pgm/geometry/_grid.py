@@ -91,9 +91,11 @@ class GridMap:
         p = np.asarray(xy, dtype=np.float64)
         if p.ndim == 0 or p.shape[-1] != 2:
             raise ValueError(f"xy must have shape (..., 2) (x, y in metres), got shape {p.shape}")
-        col = np.floor((p[..., 0] - self.origin[0]) / self.resolution)
-        row = np.floor((p[..., 1] - self.origin[1]) / self.resolution)
-        return np.stack([row, col], axis=-1).astype(np.int64)
+        with np.errstate(over="ignore"):  # x = 1e308 m: an infinite column, far outside (below)
+            col = np.floor((p[..., 0] - self.origin[0]) / self.resolution)
+            row = np.floor((p[..., 1] - self.origin[1]) / self.resolution)
+        far = float(2**62)  # a point beyond int64 (x = 1e30 m) is a cell far outside, not an overflowing cast
+        return np.clip(np.stack([row, col], axis=-1), -far, far).astype(np.int64)
 
     def cell_to_world(self, rc) -> np.ndarray:
         """Map-frame centres (x, y) of grid cells; inverse of :meth:`world_to_cell` on cell centres.

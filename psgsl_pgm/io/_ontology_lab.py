@@ -145,6 +145,7 @@ def lab_room_table(classes, room_data: dict, where: str):
         if odd:
             text = unknown_names(odd, known, "class", "neither the ontology nor COCO names", listed=listed)
             raise ValueError(f"{where}: key 'room_categories.{room}': {text}")
+    _check_mismatch(classes, rows, where, COCO_CLASSES)
     table = np.zeros((len(rows), k))
     for r, row in enumerate(rows.values()):
         total = sum(row.values())
@@ -154,6 +155,26 @@ def lab_room_table(classes, room_data: dict, where: str):
         table[r, -1] = max(1.0 - table[r, :-1].sum(), 0.0)  # unlisted classes outside the ontology + background
         table[r] /= table[r].sum()
     return n, list(rows), table
+
+
+def _check_mismatch(classes, rows: dict, where: str, coco) -> None:
+    """A room-table class the ontology lacks while the ontology has a close name outside COCO ('microwave' in the
+    room table, 'microwve' in the ontology) is a typo on one side: without this check the room's class would
+    silently count as 'other'. ValueError with "did you mean"."""
+    import difflib
+
+    own = [c for c in classes[:-1] if c not in coco]  # the ontology's names a COCO detector never reports
+    if not own:
+        return
+    for room, row in rows.items():
+        for c in row:
+            if c in classes:
+                continue
+            close = difflib.get_close_matches(c, own, n=1, cutoff=0.8)
+            if close:
+                raise ValueError(f"{where}: key 'room_categories.{room}': class {c!r} is not one of the ontology's "
+                                 f"classes, so it would count as 'other' — did you mean the ontology's {close[0]!r}? "
+                                 f"(fix the name in one of the two files)")
 
 
 def lab_ontology(data: dict, where: str, *, room_data: dict | None = None, room_where: str | None = None):

@@ -383,7 +383,7 @@ def _gain_from_moments(q, w, mom, f, f_uniform, total, rho, rho_log_rho, entropy
 
 @nb.njit(**_JIT)
 def _fuse_write(out, a, b, prior, extra, total, c0, c1):
-    """Second pass: out = a b / prior^extra / T, rounded once to ``out``'s dtype (eq. ``combined-conditionals``)."""
+    """Second pass: out = a b / prior^extra / T, rounded once to ``out``'s dtype (eq. (11))."""
     n = a.shape[0]
     has_prior = prior.shape[0] > 0
     lo, hi = c0 * CHUNK, min(n, c1 * CHUNK)

@@ -17,7 +17,7 @@ factorisation; Green's functions for all candidate sources from one adjoint solv
 * :class:`ParticleFilter` — sequential importance resampling over the source's position and release rate on the
   same likelihood as :class:`GridInfotaxis`, p(s | g) the particles' weight per cell.
 
-Every posterior is the olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
+Every posterior is the olfactory factor of eq. (11), p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
 and is combined with the semantic term by :func:`psgsl_pgm.fuse`.
 
 Hits are the robot's decision from its sensor's output (:class:`HitRule`: the rate of rise for a metal-oxide

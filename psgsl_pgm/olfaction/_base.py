@@ -51,7 +51,7 @@ class OlfactoryEstimator(abc.ABC):
 
     The posterior covers every cell of the (H, W) map, is exactly zero on occupied cells, sums to one and is
     kept internally as a log posterior (log-likelihood accumulation, ``logsumexp`` normalisation). It is the
-    olfactory factor of eq. ``combined-conditionals``, p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z), to be fused
+    olfactory factor of eq. (11), p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z), to be fused
     with the semantic term by :func:`psgsl_pgm.fuse`.
 
     Subclasses implement :meth:`_propose` (the unnormalised log posterior after one more reading, without
@@ -211,7 +211,7 @@ class OlfactoryEstimator(abc.ABC):
         The closed loop's "not found here" (:meth:`psgsl_pgm.search.DetectionModel.not_found_log_likelihood`):
         p(s | g, F̄) ∝ p(s | g) P(F̄ | s). The factor stays in the posterior through later readings (it is
         added to every later proposal) and is forgotten by :meth:`reset`. Since it depends on s only, fusing
-        the result with p(s | z) (eq. ``combined-conditionals``) gives every variant the update exactly once.
+        the result with p(s | z) (eq. (11)) gives every variant the update exactly once.
 
         Parameters
         ----------

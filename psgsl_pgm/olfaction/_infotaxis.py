@@ -55,7 +55,7 @@ class GridInfotaxis(OlfactoryEstimator):
     puffs are correlated over seconds and over the plume width. A run of n correlated readings carries the
     information of n_eff < n independent ones, so the naive product is over-confident — it collapses onto
     one cell long before the evidence supports that, and a collapsed p(s | g) would veto the semantic factor
-    p(s | z) in eq. ``combined-conditionals``. We use the power (tempered / "coarsened") likelihood, raising
+    p(s | z) in eq. (11). We use the power (tempered / "coarsened") likelihood, raising
     each factor to β = n_eff / n ∈ (0, 1] (Grünwald's "safe Bayes"; Miller & Dunson 2019, JASA 114, 1113), so
     that the posterior contracts as if only βn readings were independent. The default β = 0.5 assumes each
     reading shares roughly half of its information with its neighbours along the path (stops about one plume

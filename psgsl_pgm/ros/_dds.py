@@ -57,6 +57,22 @@ def require_dds():
 def dds_topic(topic: str) -> str:
     """The DDS topic of a ROS 2 topic: ``"/tf"`` -> ``"rt/tf"``.
 
+    Parameters
+    ----------
+    topic : str
+        An absolute ROS 2 topic name (``/tf``).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        ``topic`` is not an absolute name.
+
+    Examples
+    --------
     >>> dds_topic("/PID/Sensor_reading")
     'rt/PID/Sensor_reading'
     """
@@ -68,6 +84,22 @@ def dds_topic(topic: str) -> str:
 def dds_type_name(msgtype: str) -> str:
     """The DDS type name of a ROS 2 message type: ``"pkg/msg/Type"`` -> ``"pkg::msg::dds_::Type_"``.
 
+    Parameters
+    ----------
+    msgtype : str
+        A ROS 2 message type, ``pkg/msg/Type``.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        ``msgtype`` does not read ``pkg/msg/Type``.
+
+    Examples
+    --------
     >>> dds_type_name("geometry_msgs/msg/PoseStamped")
     'geometry_msgs::msg::dds_::PoseStamped_'
     """
@@ -168,6 +200,18 @@ def type_hash(msgtype: str) -> str:
     """The RIHS01 hash ROS 2 (Iron, Jazzy and later) gives ``msgtype``: SHA-256 of its type description as
     compact JSON (``rosidl_generator_type_description.calculate_type_hash``).
 
+    Parameters
+    ----------
+    msgtype : str
+        A ROS 2 message type of :data:`DEFINITIONS` or the lab's messages, ``pkg/msg/Type``.
+
+    Returns
+    -------
+    str
+        ``"RIHS01_"`` and 64 hexadecimal digits.
+
+    Examples
+    --------
     >>> type_hash("geometry_msgs/msg/PoseStamped")
     'RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8'
     """

@@ -47,8 +47,8 @@ class Episode:
         Time of each estimator step.
     posteriors : (s, V, H, W) ndarray
         The posterior of every variant after each step.
-    best_class : (s, H, W) uint8 ndarray
-        The most likely class per cell after each step.
+    best_class : (s, H, W) uint8 ndarray or None
+        The most likely class per cell after each step (None: the variants keep no class beliefs).
     chosen : (s, 3) ndarray
         The pose chosen next after each step (NaN: none).
     threshold : float

@@ -6,7 +6,7 @@ Channels (frame ``map``; log times = the episode's stamps, :data:`psgsl_pgm.ros.
 * ``/objects`` (``foxglove.SceneUpdate``): one cube (footprint box, height) and label per object, once;
 * ``/posterior/<variant>`` (``foxglove.Grid``): p(s | ...) of each variant (float32) after every step;
 * ``/semantics/best_class`` (``foxglove.Grid``): the most likely class per cell (uint8; the channel's metadata
-  ``classes`` names the values) after every step;
+  ``classes`` names the values) after every step, when the variants keep class beliefs;
 * ``/tf`` (``foxglove.FrameTransform``): ``map`` -> ``base_link`` at every pose sample;
 * ``/robot/pose`` (``foxglove.PoseInFrame``): the robot's pose at every pose sample;
 * ``/robot/path`` (``foxglove.PosesInFrame``): the path so far, after every step;
@@ -136,13 +136,15 @@ def _write(ep: Episode, fh) -> None:
     if ep.posteriors is not None and len(ep.step_t):
         step_ns = stamp_ns(ep.step_t)
         post = [ch.GridChannel(f"/posterior/{v}", context=ctx) for v in ep.variants]
-        best = ch.GridChannel("/semantics/best_class", context=ctx, metadata={"classes": json.dumps(list(ep.classes))})
+        best = None if ep.best_class is None else ch.GridChannel(
+            "/semantics/best_class", context=ctx, metadata={"classes": json.dumps(list(ep.classes))})
         path = ch.PosesInFrameChannel("/robot/path", context=ctx)
         nxt = ch.PoseInFrameChannel("/robot/next", context=ctx)
         for k, t in enumerate(step_ns):
             for c, p in zip(post, ep.posteriors[k]):
                 c.log(grid_msg(t, np.asarray(p, dtype=np.float32), F.Float32), log_time=int(t))
-            best.log(grid_msg(t, ep.best_class[k], F.Uint8), log_time=int(t))
+            if best is not None:  # no class beliefs (the olfaction variant alone): no class grid
+                best.log(grid_msg(t, ep.best_class[k], F.Uint8), log_time=int(t))
             done = ep.pose[pose_ns <= t]
             path.log(m.PosesInFrame(timestamp=ts(t), frame_id="map", poses=[pose(*q) for q in done]), log_time=int(t))
             if ep.chosen is not None and np.isfinite(ep.chosen[k]).all():

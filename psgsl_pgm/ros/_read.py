@@ -4,11 +4,13 @@ Topics are found by message type (:data:`ROLES`), or named per role (``topics={"
 
 * ``pose``: ``tf2_msgs/msg/TFMessage`` on ``/tf`` (with ``/tf_static``), else
   ``geometry_msgs/msg/PoseWithCovarianceStamped`` or ``PoseStamped`` — the robot frame's pose in the map frame;
-* ``gas``: ``olfaction_msgs/msg/GasSensor`` (field ``raw``), else ``std_msgs/msg/Float32`` / ``Float64`` — the
-  reading at its header stamp (a Float has none: the bag's receive time);
-* ``wind``: ``geometry_msgs/msg/Vector3Stamped``, else ``olfaction_msgs/msg/Anemometer`` — the wind vector in the
-  map frame: a Vector3 rotated from its frame; an Anemometer's speed and direction (the direction the wind comes
-  FROM, in the sensor frame, as GADEN publishes it);
+* ``gas``: ``olfaction_msgs/msg/GasSensor`` (field ``raw``, its unit from ``raw_units``), else
+  ``std_msgs/msg/Float32`` / ``Float64`` (no unit in the message) — the reading at its header stamp (a Float has
+  none: the bag's receive time);
+* ``wind`` (optional): ``geometry_msgs/msg/Vector3Stamped``, else ``olfaction_msgs/msg/Anemometer`` — the wind
+  vector in the map frame: a Vector3 rotated from its frame; an Anemometer's speed and direction (the direction
+  the wind comes FROM, in the sensor frame, as GADEN publishes it). A bag without one (or with an empty one) has
+  no wind readings;
 * ``detections`` (optional): ``vision_msgs/msg/Detection3DArray`` — per detection its best class id, score, box;
 * ``map`` (optional): ``nav_msgs/msg/OccupancyGrid`` — the first map.
 
@@ -17,6 +19,11 @@ Frames: every pose is the 2-D pose (x, y, yaw) of a frame in ``map_frame``, comp
 is used when the tree connects it to the map, else the robot frame (a sensor at the robot's centre). Dynamic
 transforms are aligned to each reading by :func:`psgsl_pgm.ros._time.interpolate` (exact stamps exactly,
 otherwise linear within the tolerance, never extrapolated).
+
+Streams start and stop at different times. A reading outside the overlap of the streams it needs — a wind
+sample or a detection array before the first or after the last transform of its frame's chain, a gas reading
+outside its frame's transforms or outside the wind samples — is skipped and counted (:attr:`BagData.skipped`),
+never extrapolated. Inside the overlap, a gap longer than the tolerance is still an error.
 
 Every failure — a file that is no bag, a truncated or corrupt one, a missing topic, an unknown message type, a
 reading no pose covers, stamps going backwards — is a ValueError that names the bag, the topic and the time.
@@ -32,7 +39,7 @@ import numpy as np
 
 from ..geometry._grid import GridMap
 from ._time import DEFAULT_TOLERANCE, check_increasing, interpolate
-from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, typestore
+from ._types import ANEMOMETER, DETECTIONS, GAS_SENSOR, UNIT_NAMES, typestore
 
 __all__ = ["META_TOPIC", "ROLES", "BagData", "Detections", "bag_topics", "decode_messages", "read_bag"]
 
@@ -51,7 +58,12 @@ ROLES = {
     "detections": (DETECTIONS,),
     "map": (OCCUPANCY,),
 }
-_REQUIRED = ("pose", "gas", "wind")
+_REQUIRED = ("pose", "gas")
+
+#: Fastest wind reading a bag may hold, m/s: beyond a category-5 hurricane (sustained winds of 70 m/s and more on
+#: the Saffir-Simpson scale, NOAA National Hurricane Center). A faster reading is a unit or encoding slip (and
+#: would overflow the wind estimate's sums of squares).
+MAX_WIND_READING = 100.0
 
 #: A JSON std_msgs/String the project's writer adds: the episode's world, source, seed and estimator.
 META_TOPIC = "/psgsl/episode"
@@ -100,7 +112,7 @@ class BagData:
     pose_t : (p,) int64 ndarray, pose : (p, 3) ndarray
         Robot pose samples (x, y, yaw) in the map frame.
     gas_t : (m,) int64 ndarray, gas : (m,) ndarray, gas_xy : (m, 2) ndarray
-        Gas readings and where they were taken.
+        Gas readings as the messages hold them (in ``gas_units``) and where they were taken.
     wind_t : (w,) int64 ndarray, wind : (w, 2) ndarray
         Wind readings in the map frame, m/s.
     detections : list of Detections
@@ -108,6 +120,9 @@ class BagData:
         The bag's OccupancyGrid (occupied: ≥ 50 or unknown).
     meta : dict
         The project's episode metadata (:data:`META_TOPIC`), or {}.
+    skipped : dict
+        Role -> number of its messages skipped for lying outside the overlap of the streams
+        (``{"gas": 0, "wind": 0, "detections": 0}``; see the module docstring).
     """
 
     path: Path
@@ -123,6 +138,9 @@ class BagData:
     detections: list = field(default_factory=list)
     grid: GridMap | None = None
     meta: dict = field(default_factory=dict)
+    skipped: dict = field(default_factory=dict)
+    gas_units: str | None = None
+    """The gas messages' unit (:data:`psgsl_pgm.ros._types.UNIT_NAMES`), None when the type has none (a Float)."""
 
     def describe(self, t_ns: int) -> str:
         """A time for messages: seconds into the bag and the stamp."""
@@ -236,6 +254,9 @@ class _Tree:
             raise ValueError(f"{self.bag}: topic {topic} at {self.describe(t_ns)}: frame {child!r} has two parents, "
                              f"{old!r} and {parent!r}")
         self.parent[child] = parent
+        if not np.isfinite(np.asarray(pose, dtype=np.float64)).all():
+            raise ValueError(f"{self.bag}: topic {topic} at {self.describe(t_ns)}: the transform {parent} -> {child} "
+                             f"holds a number that is not finite ({tuple(float(v) for v in pose)})")
         if static:
             self.static[child] = np.asarray(pose, dtype=np.float64)
         else:
@@ -258,6 +279,31 @@ class _Tree:
             check_increasing(t, f"{self.bag}: topic {topic} ({self.parent[child]} -> {child})",
                              describe=self.describe)
             self.samples[child] = (t, np.asarray(ps, dtype=np.float64), topic)
+
+    def span(self, frame: str, root: str) -> tuple:
+        """``(first, last)`` stamps (ns) at which every dynamic edge from ``root`` down to ``frame`` has samples on
+        both sides or at the time (a chain of static edges only: all times)."""
+        lo, hi = np.iinfo(np.int64).min, np.iinfo(np.int64).max
+        f = _frame(frame)
+        while f != root:
+            if f in self.samples:
+                t = self.samples[f][0]
+                lo, hi = max(lo, int(t[0])), min(hi, int(t[-1]))
+            f = self.parent[f]
+        return lo, hi
+
+    def inside(self, t_ns: np.ndarray, frames, root: str) -> np.ndarray:
+        """(m,) bool: each time lies within :meth:`span` of its frame (``frames``: one name per time)."""
+        t_ns = np.asarray(t_ns, dtype=np.int64)
+        frames = np.asarray(frames, dtype=object)
+        ok = np.ones(len(t_ns), dtype=bool)
+        for f in dict.fromkeys(frames.tolist()):
+            if f == root:
+                continue
+            lo, hi = self.span(f, root)
+            sel = frames == f
+            ok[sel] = (t_ns[sel] >= lo) & (t_ns[sel] <= hi)
+        return ok
 
     def lookup(self, frame: str, root: str, t_ns) -> np.ndarray:
         """(m, 3) poses of ``frame`` in ``root`` at the times ``t_ns``."""
@@ -370,7 +416,7 @@ def decode_messages(name: str, chosen: dict, raw: list, *, tf_topics, map_frame:
 
     tree = _Tree(name, describe, tolerance)
     pose_is_tf = chosen["pose"] in tf_topics
-    gas_t, gas_v, gas_frames = [], [], []
+    gas_t, gas_v, gas_frames, gas_units = [], [], [], {}
     wind_t, wind_v, wind_frames, wind_kind = [], [], [], None
     dets, grid, meta = [], None, {}
     for topic, t_recv, msg in raw:
@@ -390,6 +436,7 @@ def decode_messages(name: str, chosen: dict, raw: list, *, tf_topics, map_frame:
                 gas_t.append(_stamp(msg.header))
                 gas_v.append(float(msg.raw))
                 gas_frames.append(_frame(msg.header.frame_id))
+                gas_units.setdefault(int(msg.raw_units), _stamp(msg.header))
             else:
                 gas_t.append(t_recv)
                 gas_v.append(float(msg.data))
@@ -418,19 +465,28 @@ def decode_messages(name: str, chosen: dict, raw: list, *, tf_topics, map_frame:
                          f"(frames with a parent: {sorted(tree.parent)}); give --map-frame / --robot-frame")
     if not gas_t:
         raise ValueError(f"{name}: topic {chosen['gas']} holds no message")
-    if not wind_t:
-        raise ValueError(f"{name}: topic {chosen['wind']} holds no message")
+    if chosen["wind"] is not None and not wind_t:
+        chosen["wind"] = None  # an empty wind topic: a bag without wind
 
     def frame_of(f: str) -> str:
         return f if f and tree.connected(f, map_frame) else robot_frame
 
-    gas_t = np.asarray(gas_t, dtype=np.int64)
-    check_increasing(gas_t, f"{name}: topic {chosen['gas']}", describe=describe)
-    gas_xy = _per_frame(tree, gas_t, [frame_of(f) for f in gas_frames], map_frame)[:, :2]
+    skipped = {"gas": 0, "wind": 0, "detections": 0}
     wind_t = np.asarray(wind_t, dtype=np.int64)
-    check_increasing(wind_t, f"{name}: topic {chosen['wind']}", describe=describe)
-    wv = np.asarray(wind_v, dtype=np.float64)
+    if chosen["wind"] is not None:
+        check_increasing(wind_t, f"{name}: topic {chosen['wind']}", describe=describe)
+    wv = np.asarray(wind_v, dtype=np.float64).reshape(-1, 2)
+    speed = np.abs(wv[:, 0]) if wind_kind == "anemometer" else np.hypot(wv[:, 0], wv[:, 1])
+    bad = np.flatnonzero(~np.isfinite(wv).all(axis=1) | ~(speed <= MAX_WIND_READING))
+    if len(bad):
+        raise ValueError(f"{name}: topic {chosen['wind']} at {describe(int(wind_t[bad[0]]))}: the reading "
+                         f"{tuple(float(v) for v in wv[bad[0]])} is not a wind (finite, at most "
+                         f"{MAX_WIND_READING:g} m/s)")
     frames = [f if f == map_frame else frame_of(f) for f in wind_frames]
+    # wind samples the transforms of their frame cover (a map-frame sample: the robot's, for its pose)
+    keep = tree.inside(wind_t, [robot_frame if f == map_frame else f for f in frames], map_frame)
+    skipped["wind"] = int((~keep).sum())
+    wind_t, wv, frames = wind_t[keep], wv[keep], [f for f, k in zip(frames, keep) if k]
     yaw = _per_frame(tree, wind_t, frames, map_frame)[:, 2]
     if wind_kind == "vector":
         c, s = np.cos(yaw), np.sin(yaw)
@@ -438,13 +494,41 @@ def decode_messages(name: str, chosen: dict, raw: list, *, tf_topics, map_frame:
     else:  # speed, and the direction the wind comes from in the sensor frame: blowing towards direction + π
         heading = wv[:, 1] + yaw + np.pi
         wind = wv[:, :1] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-    detections = _detections(name, chosen["detections"], dets, tree, frame_of, map_frame, robot_frame, describe)
+    gas_t = np.asarray(gas_t, dtype=np.int64)
+    check_increasing(gas_t, f"{name}: topic {chosen['gas']}", describe=describe)
+    bad = np.flatnonzero(~np.isfinite(np.asarray(gas_v, dtype=np.float64)))
+    if len(bad):
+        raise ValueError(f"{name}: topic {chosen['gas']} at {describe(int(gas_t[bad[0]]))}: the reading "
+                         f"{gas_v[bad[0]]} is not a finite number")
+    gas_frames = [frame_of(f) for f in gas_frames]
+    keep = tree.inside(gas_t, gas_frames, map_frame)
+    if chosen["wind"] is not None:  # a gas reading needs the wind on both sides too
+        keep &= (gas_t >= wind_t[0]) & (gas_t <= wind_t[-1]) if len(wind_t) else False
+    skipped["gas"] = int((~keep).sum())
+    if not keep.any():
+        lo, hi = tree.span(robot_frame, map_frame)
+        spans = [f"gas {describe(int(gas_t[0]))} to {describe(int(gas_t[-1]))}",
+                 f"pose {describe(lo)} to {describe(hi)}"]
+        if chosen["wind"] is not None:
+            spans.append(f"wind {describe(int(wind_t[0]))} to {describe(int(wind_t[-1]))}" if len(wind_t)
+                         else "no wind sample the pose covers")
+        raise ValueError(f"{name}: topic {chosen['gas']}: no gas reading lies where the streams overlap "
+                         f"({'; '.join(spans)})")
+    gas_t, gas_v = gas_t[keep], np.asarray(gas_v, dtype=np.float64)[keep]
+    if len(gas_units) > 1:
+        (u0, t0), (u1, t1) = sorted(gas_units.items(), key=lambda kv: kv[1])[:2]
+        raise ValueError(f"{name}: topic {chosen['gas']}: the readings change unit at {describe(t1)}: raw_units "
+                         f"{UNIT_NAMES.get(u0, u0)} from {describe(t0)}, then {UNIT_NAMES.get(u1, u1)}")
+    units = UNIT_NAMES.get(next(iter(gas_units)), f"raw_units {next(iter(gas_units))}") if gas_units else None
+    gas_xy = _per_frame(tree, gas_t, [f for f, k in zip(gas_frames, keep) if k], map_frame)[:, :2]
+    detections, skipped["detections"] = _detections(name, chosen["detections"], dets, tree, frame_of, map_frame,
+                                                    robot_frame, describe)
     pose_t = np.unique(np.concatenate([gas_t, wind_t] + [[d.t_ns] for d in detections]))
     pose = tree.lookup(robot_frame, map_frame, pose_t)
     if not np.isfinite(gas_xy).all() or not np.isfinite(wind).all():
         raise ValueError(f"{name}: a gas or wind reading or its pose is not finite")
     return BagData(Path(name) if path is None else path, chosen, int(start), pose_t, pose, gas_t, np.asarray(gas_v),
-                   gas_xy, wind_t, wind, detections, grid, meta)
+                   gas_xy, wind_t, wind, detections, grid, meta, skipped, units)
 
 
 def _per_frame(tree: _Tree, t_ns: np.ndarray, frames: list, map_frame: str) -> np.ndarray:
@@ -491,15 +575,21 @@ def _grid(msg) -> GridMap:
     return GridMap(occ, res, (float(info.origin.position.x), float(info.origin.position.y)))
 
 
-def _detections(name, topic, msgs, tree, frame_of, map_frame, robot_frame, describe) -> list:
+def _detections(name, topic, msgs, tree, frame_of, map_frame, robot_frame, describe) -> tuple:
+    """``(detections, skipped)``: the arrays whose camera frame the transforms cover, and how many are not."""
     out = []
     if not msgs:
-        return out
+        return out, 0
     stamps = np.array([_stamp(m.header) for m in msgs], dtype=np.int64)
     check_increasing(stamps, f"{name}: topic {topic}", describe=describe)
-    for m, t in zip(msgs, stamps):
+    frames = []
+    for m in msgs:
         f = _frame(m.header.frame_id)
-        f = map_frame if f == map_frame else frame_of(f)
+        frames.append(map_frame if f == map_frame else frame_of(f))
+    keep = tree.inside(stamps, [robot_frame if f == map_frame else f for f in frames], map_frame)
+    for m, t, f, k in zip(msgs, stamps, frames, keep):
+        if not k:
+            continue
         cam = tree.lookup(robot_frame if f == map_frame else f, map_frame, [t])[0]  # where the camera looked from
         ref = np.zeros(3) if f == map_frame else cam  # the frame the boxes are given in
         n = len(m.detections)
@@ -516,4 +606,4 @@ def _detections(name, topic, msgs, tree, frame_of, map_frame, robot_frame, descr
             cls.append(str(best.hypothesis.class_id))
             score[i] = float(best.hypothesis.score)
         out.append(Detections(int(t), cam, centre, half, yaw, tuple(cls), score))
-    return out
+    return out, int((~keep).sum())

@@ -16,7 +16,7 @@ in rosbags (:func:`typestore`).
 
 from __future__ import annotations
 
-__all__ = ["ANEMOMETER", "DETECTIONS", "GAS_SENSOR", "MISSING_EXTRA", "UNITS_PPM", "require", "typestore"]
+__all__ = ["ANEMOMETER", "DETECTIONS", "GAS_SENSOR", "MISSING_EXTRA", "UNITS_PPM", "UNIT_NAMES", "require", "typestore"]
 
 #: The error message when the ``ros`` extra is missing.
 MISSING_EXTRA = ('reading and writing ROS 2 bags and MCAP needs rosbags, mcap and foxglove-sdk (the "ros" extra): '
@@ -28,6 +28,10 @@ DETECTIONS = "vision_msgs/msg/Detection3DArray"
 
 #: ``GasSensor.raw_units`` value for ppm.
 UNITS_PPM = 3
+
+#: ``GasSensor.raw_units`` value -> unit name (the message definition's constants).
+UNIT_NAMES = {0: "unknown", 1: "volt", 2: "ampere", 3: "ppm", 4: "ppb", 5: "ohm", 6: "ppm·m", 100: "°C",
+              101: "% relative humidity", 255: "not valid"}
 
 _GAS_SENSOR_MSG = """\
 uint8 TECH_UNKNOWN=0

@@ -678,7 +678,7 @@ def command_label(command: str):
         _COMMAND.reset(token)
 
 
-def _progress_bar(total: int, desc: str, progress: bool):
+def _progress_bar(total: int, desc: str, progress: bool, unit: str = "run"):
     if not progress:
         return _NoBar()
     try:
@@ -686,7 +686,7 @@ def _progress_bar(total: int, desc: str, progress: bool):
     except ModuleNotFoundError:  # a core-only install: the grid runs, without a bar
         return _NoBar()
     command = _COMMAND.get()
-    return tqdm(total=total, desc=desc if command is None else f"{command}: {desc}", unit="run")
+    return tqdm(total=total, desc=desc if command is None else f"{command}: {desc}", unit=unit)
 
 
 def run_grid(jobs: Sequence[GridJob], *, write: Callable, check_done: Callable | None = None,

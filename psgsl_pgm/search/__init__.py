@@ -16,7 +16,8 @@ from ._live import LiveSession, run_live, write_live
 from ._loop import SearchConfig, SearchRun, run_closed_loop
 from ._metrics import credible_region, hpd_level, paired_difference, survival, wilson_interval
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
-from ._policies import POLICIES, SCORES, Decision, Situation, choose, score_per_time, travel_time
+from ._choose import choose
+from ._policies import POLICIES, SCORES, Decision, Situation, score_per_time, travel_time
 from ._space import FreeSpace
 from ._store import load_search_run, save_search_run
 from ._survival import holm, kaplan_meier, nested_bootstrap, paired_comparison, rmst, sign_flip_pvalue

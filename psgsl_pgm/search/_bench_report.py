@@ -25,7 +25,7 @@ import numpy as np
 from ..io._json import json_safe
 from ._metrics import clustered_wilson, declaration_summary, wilson_interval
 from ._store import load_search_run
-from ._survival import kaplan_meier, km_median, nested_bootstrap
+from ._survival import kaplan_meier, km_median, nested_bootstrap, rmst
 
 __all__ = ["MIN_EPISODES", "PRIMARY", "write_report"]
 
@@ -61,7 +61,9 @@ def _table(out: Path, settings: dict) -> list:
                              "reached": bool(r.found), "t_reach": min(float(r.time_to_find), settings["budget"]),
                              "kind": b["episode"]["kind"],
                              "class": b["episode"]["class"], "gas": b["episode"]["gas"],
-                             "cpu": b.get("cpu_seconds")})
+                             "cpu": b.get("cpu_seconds")}
+                            | ({"gas_identified": r.gas_identified, "time_to_gas": r.time_to_gas()}
+                               if r.gas_unknown else {}))
     return rows
 
 
@@ -96,7 +98,20 @@ def _arm_stats(rows, tau: float) -> dict:
             **({"reach": {"success_rate": float(np.mean([r["reached"] for r in rows])),
                           "rmst": float(np.mean([r["t_reach"] for r in rows])),
                           "note": "secondary: the first pass within the found radius of the source"}}
-               if all("reached" in r for r in rows) else {})}
+               if all("reached" in r for r in rows) else {}),
+            **(_gas_stats(rows, tau) if rows and all("gas_identified" in r for r in rows) else {})}
+
+
+def _gas_stats(rows, tau: float) -> dict:
+    """``gas_identified`` (most probable gas at the end = the true one; Wilson 95 %) and ``time_to_gas`` (RMST of
+    the time until p(true gas | e-nose readings) ≥ 0.9, censored at τ) of runs whose gas the robot was not told."""
+    ok = np.array([r["gas_identified"] for r in rows])
+    t = np.array([min(r["time_to_gas"][0], tau) for r in rows])
+    reached = np.array([r["time_to_gas"][1] for r in rows])
+    area = rmst(t, reached, tau)
+    return {"gas_identified": {"value": float(ok.mean()), "ci95": wilson_interval(int(ok.sum()), len(rows))},
+            "time_to_gas": {"value": area["value"], "ci95": area["ci95"], "tau": tau, "level": 0.9,
+                            "reached": int(reached.sum())}}
 
 
 def _reached(d) -> str:

@@ -37,7 +37,7 @@ from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig
 from ..runs._key import digest, run_key, world_key
 from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sources, robot_ontology
 from ._grid import closed_loop_in_world
-from ._loop import SearchConfig
+from ._settings import SearchConfig
 from ._policies import POLICIES, SEMANTICS_ALONE
 from ._reactive import REACTIVE
 from ._split import benchmark_sample, check_split
@@ -109,14 +109,16 @@ def condition_world(world_path: Path, world, condition: str, house: int, folder:
     return out
 
 
-def benchmark_episode(source, seed, policy, variant, estimator, *, world, world_digest, config, search, label):
+def benchmark_episode(source, seed, policy, variant, estimator, *, world, world_digest, config, search, label,
+                      gas_type=None):
     """One run of the grid: :func:`closed_loop_in_world`, its config marked with the benchmark's ``label``
     (house, condition, episode) so that the report can group the stored runs, and the run's CPU seconds."""
     import time
 
     t0 = time.process_time()
+    told = {} if gas_type is None else {"gas_type": gas_type}  # the true gas of an episode the robot is not told
     run = closed_loop_in_world(source, seed, policy, variant, estimator, world=world, world_digest=world_digest,
-                               config=config, search=search)
+                               config=config, search=search, **told)
     run.config["benchmark"] = dict(label, cpu_seconds=time.process_time() - t0)  # for planning; not in the key
     return run
 
@@ -149,7 +151,7 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
                   off_rate: float = 0.1, gases=("smoke",), first_house: int | None = None, house_options=None,
                   workers: int = 2, scheduler: str | None = None, config: ExperimentConfig | None = None,
                   search: SearchConfig | None = None, progress: bool = True, figures: bool = True,
-                  command: str | None = None, split: str = "dev") -> dict:
+                  command: str | None = None, split: str = "dev", gas_unknown: bool = False) -> dict:
     """Run (or resume) the benchmark and write its report (module docstring).
 
     Parameters
@@ -185,6 +187,10 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         The command line, quoted in the report.
     split : {"dev", "test"}, keyword-only
         The development or the test homes and seeds (:mod:`psgsl_pgm.search._split`); recorded in the report.
+    gas_unknown : bool, keyword-only
+        Do not tell the robot the episode's gas (drawn from ``gases``): it carries an electronic nose and infers
+        p(γ | ζ_1:t) (``config.gas = "unknown"``, :func:`psgsl_pgm.search.run_closed_loop`); the report's arms
+        gain ``gas_identified`` and ``time_to_gas``.
 
     Returns
     -------
@@ -233,9 +239,9 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     if unknown:
         raise ValueError(f"house_options may hold n_rooms, area and room_types, got {unknown}")
     if world is None:
-        from ..sim._generate import _check_request
+        from ..sim._generate import check_request
 
-        n, a, t = _check_request(house_range.start, options.get("n_rooms"), options.get("area"),
+        n, a, t = check_request(house_range.start, options.get("n_rooms"), options.get("area"),
                                  options.get("room_types"))
         options = {k: v for k, v in (("n_rooms", n), ("area", a), ("room_types", t)) if v is not None}
         if len(house_range) < 1:
@@ -259,6 +265,10 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     bad = [g for g in gases if g not in base_ontology.gases]
     if not gases or bad:
         raise ValueError(f"gases must be gases of the ontology {list(base_ontology.gases)}, got {list(gases)}")
+    if not isinstance(gas_unknown, (bool, np.bool_)):
+        raise TypeError(f"gas_unknown must be True or False, got {gas_unknown!r}")
+    if gas_unknown:
+        config = replace(config, gas="unknown")  # the episode's gas goes to the world only (gas_type below)
     key = run_key("benchmark", world_part, experiment=config, search=search,
                   benchmark={"off_rate": off_rate, "gases": list(gases), "estimator": estimator})
 
@@ -287,12 +297,13 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         jobs = []
         for s, lab, c in itertools.product(seed_ids, labels, conditions):
             ep = episodes[f"{lab}/{s}"]
-            cfg = replace(config, gas=ep["gas"])
+            cfg = config if gas_unknown else replace(config, gas=ep["gas"])
+            told = {"gas_type": ep["gas"]} if gas_unknown else {}
             for p, v in benchmark_arms(policies, variants, c):
                 name = f"{lab}__{c}__{p}__{v}__{estimator}__seed{s}.npz"
                 jobs.append(GridJob(out / "runs" / name, benchmark_episode, (tuple(ep["xy"]), s, p, v, estimator),
                                     {"world": str(cond_paths[lab, c]), "world_digest": digests[lab, c],
-                                     "config": cfg, "search": search,
+                                     "config": cfg, "search": search, **told,
                                      "label": {"house": lab, "condition": c, "episode": ep}}))
         run_grid(jobs, write=write, scheduler=scheduler, workers=workers, progress=progress,
                  desc="benchmark runs")

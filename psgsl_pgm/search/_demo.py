@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ._grid import run_search_grid
-from ._loop import SearchConfig
+from ._settings import SearchConfig
 
 __all__ = ["DEMO_BUDGET", "DEMO_SEARCH_SEEDS", "run_search_demo"]
 

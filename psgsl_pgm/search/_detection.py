@@ -53,11 +53,24 @@ from .._shared._validate import bool_mask, positive, unit_interval
 __all__ = ["DetectionModel"]
 
 _PATHS_MAX = 1024  # paths whose found hypotheses are kept (the drives between a run's stops: tens to hundreds)
+#: Point-centre pairs compared at once: the (points, centres, 2) differences stay within 32 MiB however many
+#: cells a map has (a 1-cm house has 10⁵-10⁶ cells and footprints of thousands of cells).
+_PAIRS_AT_ONCE = 1 << 21
 
 
 def _d2(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
     """Squared distances, broadcast; the one formula of every "within r" test of this module."""
     return ((points - centres) ** 2).sum(axis=-1)
+
+
+def _near_any(points: np.ndarray, centres: np.ndarray, r2: float) -> np.ndarray:
+    """(p,) bool: whether each point lies within √r2 of some centre (:func:`_d2`, in blocks of points so that
+    memory is bounded by :data:`_PAIRS_AT_ONCE`, not by p × the number of centres)."""
+    out = np.empty(len(points), dtype=bool)
+    step = max(1, _PAIRS_AT_ONCE // max(len(centres), 1))
+    for i in range(0, len(points), step):
+        out[i : i + step] = (_d2(points[i : i + step, None, :], centres[None, :, :]) <= r2).any(axis=1)
+    return out
 
 
 class DetectionModel:
@@ -147,7 +160,7 @@ class DetectionModel:
             for j in np.flatnonzero(inside.any(axis=0)).tolist():  # the footprints within reach (a handful)
                 k = np.flatnonzero(inside[:, j])
                 fp = self._fp_points[self._fp_starts[j] : self._fp_starts[j] + self._sizes[j]]
-                out[k, j] = (_d2(p[k][:, None, :], fp[None, :, :]) <= self.found_radius**2).any(axis=1)
+                out[k, j] = _near_any(p[k], fp, self.found_radius**2)
         return out
 
     def found(self, points, source_cell: int) -> np.ndarray:
@@ -158,13 +171,26 @@ class DetectionModel:
         j = int(self.owner[c])
         if j >= 0:  # the footprint's own points: the same comparisons as near_footprints()[:, j]
             fp = self._fp_points[self._fp_starts[j] : self._fp_starts[j] + self._sizes[j]]
-            return (_d2(p[:, None, :], fp[None, :, :]) <= self.found_radius**2).any(axis=1)
+            return _near_any(p, fp, self.found_radius**2)
         return _d2(p, self.centres[c][None, :]) <= self.found_radius**2
 
     def _pairs(self, points):
         """(point index, hypothesis) pairs of every hypothesis found from each point, sorted by point (no
-        duplicates: the disc part covers cells no object owns, and objects own disjoint cells)."""
+        duplicates: the disc part covers cells no object owns, and objects own disjoint cells). Points are taken
+        in blocks, so that memory is bounded by :data:`_PAIRS_AT_ONCE` candidates, not by their number."""
         p = self._points(points)
+        step = max(1, _PAIRS_AT_ONCE // len(self._offsets))
+        if len(p) <= step:
+            return self._block_pairs(p)
+        ks, cs = [], []
+        for i in range(0, len(p), step):
+            k, c, _ = self._block_pairs(p[i : i + step])
+            ks.append(k + i)
+            cs.append(c)
+        return np.concatenate(ks), np.concatenate(cs), len(p)
+
+    def _block_pairs(self, p):
+        """:meth:`_pairs` of one block of points."""
         h, w = self.shape
         rc = self.grid.world_to_cell(p)  # (p, 2)
         cand = rc[:, None, :] + self._offsets[None, :, :]  # (p, o, 2)

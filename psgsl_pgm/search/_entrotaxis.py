@@ -38,6 +38,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import entr
 
+from ._policies import _best, _candidates, _detection, _found_mass, _hit_rows, _score
+
 __all__ = ["choose_entrotaxis", "entrotaxis_gain"]
 
 
@@ -60,7 +62,6 @@ def entrotaxis_gain(sit, cells) -> np.ndarray:
     gain : (K,) ndarray of float64
         In [0, ln 3].
     """
-    from ._policies import _detection, _found_mass, _hit_rows
 
     cells = np.asarray(cells)
     post = np.asarray(sit.posterior, dtype=np.float64).ravel()
@@ -78,7 +79,6 @@ def entrotaxis_gain(sit, cells) -> np.ndarray:
 def choose_entrotaxis(sit):
     """The entrotaxis decision: the best-scoring candidate pose of :func:`entrotaxis_gain` (first maximum in
     lattice order, then heading order), under the situation's scoring rule."""
-    from ._policies import _best, _candidates, _score
 
     cells, drive, pred, tau = _candidates(sit)
     gain = entrotaxis_gain(sit, cells)

@@ -40,14 +40,15 @@ def findability(world, seed: int = 0, *, found_radius: float | None = None, clea
     dict
         Name -> ``{"object": object name or None, "target_cells": int, "gap": m from the nearest drivable
         cell to what counts as found, "geodesic": m from the start to the nearest drivable cell within
-        found_radius (inf: none is reachable), "findable": bool}``.
+        found_radius (inf: none is reachable), "findable": bool, "at_start": m from the start to what counts as
+        found when that is within found_radius (the robot finds the source where it starts), else None}``.
     """
     from scipy import ndimage as ndi
 
     from .._shared._validate import positive
     from ..sim._camera import Camera
     from ._detection import DetectionModel
-    from ._loop import SearchConfig
+    from ._settings import SearchConfig
     from ._space import FreeSpace
 
     defaults = SearchConfig()
@@ -59,7 +60,8 @@ def findability(world, seed: int = 0, *, found_radius: float | None = None, clea
     if not space.nav.any():
         raise ValueError(f"{world.path}: no cell of the map is drivable (free, not furniture or a window, more "
                          f"than clearance {clearance:g} m from each)")
-    d_start = space.distances(space.snap(world.start_for(house))).reshape(g.shape)
+    start = np.asarray(world.start_for(house), dtype=np.float64)
+    d_start = space.distances(space.snap(start)).reshape(g.shape)
     out = {}
     detection = DetectionModel.from_house(house, r)
     nav_centres = space.centres[space.nav.ravel()]
@@ -73,23 +75,34 @@ def findability(world, seed: int = 0, *, found_radius: float | None = None, clea
         near[space.nav] = detection.found(nav_centres, hypothesis)  # the closed loop's own rule
         cells = int(region.sum()) if obj is not None else 0
         geo = float(d_start[near].min()) if near.any() else float("inf")
+        at_start = None
+        if detection.found(start[None], hypothesis)[0]:  # the loop's rule at the start itself
+            at_start = float(np.sqrt(((space.centres[region.ravel()] - start) ** 2).sum(axis=-1).min()))
         out[str(name) if isinstance(name, str) else f"{xy[0]:g},{xy[1]:g}"] = {
             "object": None if obj is None else obj.name, "target_cells": cells, "gap": gap,
-            "geodesic": geo, "findable": bool(np.isfinite(geo))}
+            "geodesic": geo, "findable": bool(np.isfinite(geo)), "at_start": at_start}
     return out
 
 def check_findable(world, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
                    sources=None) -> dict:
-    """:func:`findability`, refusing (ValueError naming the source and the gap) a source never found."""
-    from ._loop import SearchConfig
+    """:func:`findability`, refusing (ValueError naming the source and the gap) a source never found, and a source
+    found where the robot starts (a search would end before its first reading: nothing to measure)."""
+    from ._settings import SearchConfig
 
     clearance_used = world.clearance if clearance is None else clearance
     found_radius = SearchConfig().found_radius if found_radius is None else found_radius
     result = findability(world, seed, found_radius=found_radius, clearance=clearance, sources=sources)
     for name, f in result.items():
+        what = f"the footprint of {f['object']!r}" if f["object"] else "it"
+        if f["at_start"] is not None:
+            start = world.start_for(world.house(seed))
+            raise ValueError(
+                f"{world.path}: source {name!r} is found at the start: the start ({start[0]:g}, {start[1]:g}) is "
+                f"{f['at_start']:.2f} m from {what}, within the found radius {found_radius:g} m, so a search would "
+                f"end before its first reading; move the start (key 'start') or the source, or lower the found "
+                f"radius (--found-radius) below {f['at_start']:.2f} m")
         if f["findable"]:
             continue
-        what = f"the footprint of {f['object']!r}" if f["object"] else "it"
         if f["gap"] > found_radius:
             raise ValueError(
                 f"{world.path}: source {name!r} can never be found: the nearest drivable cell is {f['gap']:.2f} m "

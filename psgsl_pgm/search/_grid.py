@@ -120,7 +120,28 @@ def summarize_runs(runs) -> dict:
         "mean_error": mean_ci([_time_mean(r.time, r.error) for r in runs], lower=0.0),
         "seeds": [int(r.seed) for r in runs],
         "split": split_of_seeds(r.seed for r in runs),
+        **gas_summary(runs, budget),
     }
+
+
+def gas_summary(runs, budget: float) -> dict:
+    """How well runs whose gas the robot was not told identified it: ``gas_identified`` (the fraction of runs
+    whose most probable gas at the end, arg max p(γ | ζ_1:t), is the true one, with its 95 % Wilson interval) and
+    ``time_to_gas`` (RMST(τ) of the time until p(true γ | ζ_1:t) ≥ 0.9, censored at the budget τ, with its 95 %
+    Greenwood interval, and how many runs reached it). Empty when any run was told its gas."""
+    runs = list(runs)
+    if not runs or not all(r.gas_unknown for r in runs):
+        return {}
+    n = len(runs)
+    ok = np.array([r.gas_identified for r in runs])
+    timed = [r.time_to_gas() for r in runs]
+    t = np.array([v[0] for v in timed])
+    reached = np.array([v[1] for v in timed])
+    area = rmst(t, reached, budget)
+    return {"gas_identified": {"value": float(ok.mean()), "ci95": wilson_interval(int(ok.sum()), n)},
+            "time_to_gas": {"value": area["value"], "ci95": area["ci95"], "tau": budget, "level": 0.9,
+                            "reached": int(reached.sum()), "n_runs": n,
+                            "note": "RMST of the time until p(true gas | e-nose readings) >= 0.9, censored at the budget"}}
 
 
 def _time_mean(time, values) -> float:

@@ -43,8 +43,9 @@ from ..ros._time import DEFAULT_TOLERANCE
 from ..sim import Camera, DetectorModel, GasSensor, default_world, load_world
 from ._declare import propose_declaration
 from ._detection import DetectionModel
-from ._loop import SearchConfig
-from ._policies import POLICIES, Situation, check_semantics_alone, choose
+from ._settings import SearchConfig
+from ._choose import choose
+from ._policies import POLICIES, Situation, check_semantics_alone
 from ._space import FreeSpace
 
 __all__ = ["DEFAULT_TOPICS", "LiveSession", "LiveStep", "live_subscriptions", "run_live", "write_live"]
@@ -413,7 +414,27 @@ def write_live(result: dict, session: LiveSession, out, *, subs: dict, goal_topi
     """Record a live run into ``out``: ``live.bag`` (every message received, the published goals and posteriors,
     and the session's settings on :data:`psgsl_pgm.ros.META_TOPIC`: ``psgsl replay`` replays it), ``steps.csv``
     (per step: seconds since the first reading, position, hit, value, goal, credible-region area) and
-    ``posterior-<variant>.npy`` (final posteriors, (H, W) float64). Every file whole or not at all."""
+    ``posterior-<variant>.npy`` (final posteriors, (H, W) float64). Every file whole or not at all.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`run_live` returned: ``{"steps": [...], "messages": [(topic, t_ns, message), ...], ...}``.
+    session : LiveSession
+        The session that made the steps (its house, variant and settings).
+    out : path-like
+        The folder to write into (created if missing).
+    subs : dict, keyword-only
+        Topic -> ROS 2 message type of every subscribed topic (the types the bag records).
+    goal_topic, posterior_topic : str, keyword-only
+        The topics the goals (``geometry_msgs/msg/PoseStamped``) and posteriors (``nav_msgs/msg/OccupancyGrid``)
+        were published on.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from ..io._output import write_file_atomically
     from ..ros._dds import message_types, pose_stamped, posterior_grid
     from ..ros._types import typestore

@@ -1,43 +1,16 @@
 """Declarations with an honest uncertainty: the credible region and the HPD level of the true source (defined
-with the validation experiment's metrics, :mod:`psgsl_pgm.experiment._metrics`), and the Wilson interval of a
-success rate. Times to find are censored at the budget; their statistics are in :mod:`._survival`."""
+with the validation experiment's metrics, :mod:`psgsl_pgm.experiment._metrics`, as is the Wilson interval of a
+success rate), and the house-clustered Wilson interval. Times to find are censored at the budget; their
+statistics are in :mod:`._survival`."""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
-from ..experiment._metrics import credible_region, hpd_level, mean_ci
+from ..experiment._metrics import _wilson, credible_region, hpd_level, mean_ci, wilson_interval
 
-__all__ = ["clustered_wilson", "credible_region", "declaration_summary", "hpd_level", "paired_difference", "survival", "wilson_interval"]
-
-
-def _wilson(p: float, n: float, level: float) -> list:
-    """Wilson score interval of a proportion ``p`` observed on ``n`` (possibly effective, non-integer) trials."""
-    z = stats.norm.ppf(0.5 + level / 2)
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    lo = 0.0 if p == 0 else max(0.0, centre - half)
-    hi = 1.0 if p == 1 else min(1.0, centre + half)
-    return [float(lo), float(hi)]
-
-
-def wilson_interval(successes: int, n: int, *, level: float = 0.95) -> list:
-    """Wilson score interval of a binomial proportion, [lo, hi].
-
-    Never a point: at 0 or n successes it is [0, hi] or [lo, 1] with hi > 0, lo < 1 (the same interval as
-    ``scipy.stats.binomtest(successes, n).proportion_ci(method="wilson")``).
-
-    Examples
-    --------
-    >>> [round(x, 4) for x in wilson_interval(8, 10)]
-    [0.4902, 0.9433]
-    >>> [round(x, 4) for x in wilson_interval(10, 10)]
-    [0.7225, 1.0]
-    """
-    if n < 1:
-        return [float("nan"), float("nan")]
-    return _wilson(successes / n, n, level)
+__all__ = ["clustered_wilson", "credible_region", "declaration_summary", "hpd_level", "paired_difference", "survival",
+           "wilson_interval"]
 
 
 def clustered_wilson(successes, groups, *, level: float = 0.95) -> dict:

@@ -116,11 +116,10 @@ from scipy.special import entr
 from .._shared._validate import one_of
 from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
-from ._entrotaxis import choose_entrotaxis
-from ._reactive import REACTIVE, check_reactive, reactive_step
 
-__all__ = ["Decision", "POLICIES", "SCORES", "SEMANTICS_ALONE", "Situation", "check_score", "check_semantics_alone",
-           "choose", "object_scores", "olfactory_gain", "score_per_time", "semantic_mode", "travel_time"]
+__all__ = ["Decision", "POLICIES", "REACTIVE", "SCORES", "SEMANTICS_ALONE", "Situation", "check_reactive", "check_score",
+           "check_semantics_alone", "object_scores", "olfactory_gain", "score_per_time", "semantic_mode",
+           "travel_time"]
 
 #: Policies of the closed loop.
 POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object",
@@ -207,6 +206,19 @@ def score_per_time(gain, tau) -> np.ndarray:
     if np.any(tau <= 0):
         raise ValueError("travel times must be positive")
     return np.where(gain > 0, gain / tau, gain * tau)
+
+
+#: The reactive policies: no map of the source, gas hits and anemometer readings only
+#: (:mod:`psgsl_pgm.search._reactive`).
+REACTIVE = ("surge-cast", "spiral")
+
+
+def check_reactive(policy: str, variant: str, *, where: str = "") -> None:
+    """ValueError when ``policy`` is reactive (:data:`REACTIVE`) and ``variant`` is not ``olfaction``: a reactive
+    policy uses no semantic term; ``where`` prefixes the message."""
+    if policy in REACTIVE and variant != "olfaction":
+        raise ValueError(f"{where}policy {policy!r} (reactive: gas hits and wind only) runs with variant "
+                         f"'olfaction' only, got {variant!r}")
 
 
 def check_semantics_alone(policy: str, variant: str, *, where: str = "") -> None:
@@ -400,8 +412,9 @@ def _semantic_gain(sit: Situation):
     if sit.variant == "olfaction":
         return None
     b = sit.beliefs
-    return semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,
-                                     olfactory=b.estimator.posterior, predictive="exact").ravel()
+    return semantic_information_gain(b.maps[sit.variant].probs, b.likelihood, b.class_prior,  # the gas mixture when
+                                     olfactory=b.estimator.posterior, predictive="exact",   # the gas is unknown
+                                     gas_probs=getattr(b, "gas_probs", None)).ravel()
 
 
 def _view_information(sit: Situation, cells, gain=None) -> np.ndarray:
@@ -929,22 +942,3 @@ def _nearest_object_step(sit: Situation) -> Decision:
     if np.isfinite(dist[goal]):
         return Decision(goal, (heading,), space.path(pred, goal), float(dist[goal]), float(score[0][j]))
     return _towards(sit, goal)
-
-
-def choose(policy: str, sit: Situation) -> Decision:
-    """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
-    if policy == "greedy":
-        return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell
-    if policy == "semantic-modes":
-        return _semantic_step(sit)
-    if policy == "nearest-object":
-        return _nearest_object_step(sit)
-    if policy == "infotaxis":
-        return _choose_infotaxis(sit)
-    if policy == "space-aware-infotaxis":
-        return _choose_space_aware(sit)
-    if policy == "entrotaxis":
-        return choose_entrotaxis(sit)
-    if policy in REACTIVE:
-        return reactive_step(policy, sit)
-    raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")

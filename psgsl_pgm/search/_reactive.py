@@ -49,10 +49,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._policies import REACTIVE, Decision, _reachable_nearest, check_reactive
+
 __all__ = ["CALM", "CAST_LEG", "CAST_MAX", "GAP", "REACTIVE", "STEP", "SURGE", "check_reactive", "reactive_step"]
 
-#: The reactive policies: no map of the source, gas hits and anemometer readings only.
-REACTIVE = ("surge-cast", "spiral")
 #: m, the longest drive between two readings.
 STEP = 1.0
 #: m, the distance between the turns of the spiral (twice the default found radius: the turns' found discs touch).
@@ -67,14 +67,6 @@ CAST_MAX = 4.0
 CALM = 0.02
 
 _STATE = "reactive: state"  # Situation.cache key
-
-
-def check_reactive(policy: str, variant: str, *, where: str = "") -> None:
-    """ValueError when ``policy`` is reactive (:data:`REACTIVE`) and ``variant`` is not ``olfaction``: a reactive
-    policy uses no semantic term; ``where`` prefixes the message."""
-    if policy in REACTIVE and variant != "olfaction":
-        raise ValueError(f"{where}policy {policy!r} (reactive: gas hits and wind only) runs with variant "
-                         f"'olfaction' only, got {variant!r}")
 
 
 def _unit(v):
@@ -178,7 +170,6 @@ class _State:
 
 def _goal(sit, point) -> int:
     """The reachable drivable cell nearest (straight line) to ``point`` (m), clipped to the map."""
-    from ._policies import _reachable_nearest
 
     grid = sit.space.grid
     h, w = sit.space.nav.shape
@@ -193,7 +184,6 @@ def reactive_step(policy: str, sit):
     Returns a :class:`psgsl_pgm.search.Decision` whose ``score`` is the drive's remaining distance to the
     waypoint, negated (m). The camera keeps its heading.
     """
-    from ._policies import Decision
 
     if policy not in REACTIVE:
         raise ValueError(f"policy must be one of {REACTIVE}, got {policy!r}")

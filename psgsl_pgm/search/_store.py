@@ -12,7 +12,7 @@ from ..experiment._store import _naming
 from ..experiment._store import read_run_key as _read_run_key
 from ..io._npyfile import READ_ERRORS, load_npy
 from ..runs._runner import atomic_write
-from ._loop import SearchRun
+from ._settings import SearchRun
 
 __all__ = ["read_run_key", "load_search_run", "save_search_run", "search_run_path", "write_search_run"]
 
@@ -21,6 +21,8 @@ _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "er
 #: The declaration's scalars (:class:`SearchRun`), written by every run and absent from runs stored before
 #: declarations (read as "no declaration": those runs ended with ``end="reach"``).
 _DECLARATION = ("declared", "declared_xy", "time_to_declare", "declared_error", "declared_correct", "declared_mass")
+#: The gas belief of a run whose gas the robot was not told (:class:`SearchRun`); written by those runs only.
+_GAS = ("gas", "gas_names", "gas_probs")
 
 
 def search_run_path(directory, source, policy: str, variant: str, estimator: str, seed: int) -> Path:
@@ -36,7 +38,8 @@ def write_search_run(run: SearchRun, fh) -> None:
         time_to_find=np.array(run.time_to_find), geodesic=np.array(run.geodesic), driven=np.array(run.driven),
         config=np.array(json.dumps(run.config, sort_keys=True)), estimator_naming=np.array(ESTIMATOR_NAMING),
         **{k: getattr(run, k) for k in _ARRAYS},
-        **{k: np.asarray(getattr(run, k)) for k in _DECLARATION})
+        **{k: np.asarray(getattr(run, k)) for k in _DECLARATION},
+        **({k: np.asarray(getattr(run, k)) for k in _GAS} if run.gas_unknown else {}))
 
 
 def save_search_run(run: SearchRun, path) -> Path:
@@ -56,6 +59,9 @@ def load_search_run(path) -> SearchRun:
                 arrays |= {k: z[k] for k in _DECLARATION}
                 arrays |= {k: bool(arrays[k]) for k in ("declared", "declared_correct")}
                 arrays |= {k: float(arrays[k]) for k in ("time_to_declare", "declared_error", "declared_mass")}
+            if "gas_probs" in names:  # a run whose gas the robot was not told
+                arrays |= {"gas": str(z["gas"]), "gas_names": tuple(str(g) for g in z["gas_names"]),
+                           "gas_probs": z["gas_probs"]}
             return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
                              stored_estimator_name(str(z["estimator"]), _naming(z)), arrays.pop("source_xy"),
                              bool(z["found"]),

@@ -158,7 +158,23 @@ def rmst(times, found, tau, *, level: float = 0.95) -> dict:
 def holm(pvalues) -> np.ndarray:
     """Holm's step-down adjusted p-values: p̃_(i) = max_{j ≤ i} min(1, (m − j + 1) p_(j)) in ascending order.
 
-    Rejecting where p̃ ≤ α keeps the family-wise error rate of the m tests ≤ α under any dependence.
+    Rejecting where p̃ ≤ α keeps the family-wise error rate of the m tests ≤ α under any dependence (Holm,
+    *Scand. J. Statist.* 6, 65-70, 1979).
+
+    Parameters
+    ----------
+    pvalues : (m,) array_like of float
+        The m tests' p-values, each in [0, 1], in any order.
+
+    Returns
+    -------
+    (m,) ndarray of float64
+        The adjusted p-values, in the order of ``pvalues``; each ≥ its raw p-value and ≤ 1.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``pvalues`` not a 1-D array of numbers, or a value outside [0, 1] or not finite.
 
     Examples
     --------

@@ -9,7 +9,8 @@ Lightweight, seeded, vectorised substitutes for the lab's tool chain:
   :func:`write_gaden_wind_csv`), or time-resolved lattice Boltzmann CFD through the house (:func:`cfd_wind`, the
   ``cfd`` extra);
 * gas — GADEN's filament model in 2-D (:class:`FilamentModel`), gas sensors (the ideal :class:`GasSensor`, a
-  metal-oxide :class:`MOXSensor`, a photo-ionisation :class:`PIDSensor`) and the :class:`Anemometer`;
+  metal-oxide :class:`MOXSensor`, a photo-ionisation :class:`PIDSensor`), the :class:`Anemometer` and an
+  electronic nose that names the gas (:class:`ElectronicNose`);
 * vision — camera field of view, a detector with distance-dependent detection and class confusion
   (:class:`DetectorModel`), frames (:func:`take_frame`) and the dense class-belief map (:class:`SemanticMap`);
 * :func:`make_world` — all of it on one clock for the experiment, optionally with the robot's localisation
@@ -33,6 +34,7 @@ from ._camera import OCCLUSIONS, Camera, Frame, take_frame
 from ._cfd import read_gaden_wind_csv, read_gaden_wind_snapshots, write_gaden_wind_csv
 from ._classes import HOUSE_CLASSES, HOUSE_ROOMS, OTHER, match_names, reindex
 from ._detector import DEFAULT_CONFUSION_GROUPS, NOTHING, DetectorErrors, DetectorModel
+from ._enose import ENOSE_GASES, ENOSE_SENSORS, ElectronicNose, Smell, draw_gas
 from ._filaments import FilamentModel, FilamentParams, read_gaden_config
 from ._generate import AREA_RANGE, ROOM_RANGE, GeneratedHouse, generate_house
 from ._generated_ontology import GENERATOR_REFERENCE_SEEDS, generated_ontology
@@ -50,7 +52,8 @@ from ._sensors import Anemometer, GasReading, GasSensor
 from ._wind import WindField, WindSequence, make_wind, potential_flow
 from ._world import World, make_world
 from ._world_model import WORLD_COMPONENTS, WORLD_MODELS, WorldModel
-from ._worldfile import WorldSpec, default_world, load_world, navigable
+from ._worldfile import (MAX_FREE_CELLS, MAX_WIND_SPEED, WorldSpec, check_free_cells, default_world, load_world,
+                         navigable)
 
 __all__ = [
     "AREA_RANGE",
@@ -59,6 +62,9 @@ __all__ = [
     "DEFAULT_CONFUSION_GROUPS",
     "DetectorErrors",
     "DetectorModel",
+    "ENOSE_GASES",
+    "ENOSE_SENSORS",
+    "ElectronicNose",
     "FilamentModel",
     "FilamentParams",
     "Frame",
@@ -82,6 +88,7 @@ __all__ = [
     "ROOM_RANGE",
     "SceneObject",
     "SemanticMap",
+    "Smell",
     "WindField",
     "WindSequence",
     "WORLD_COMPONENTS",
@@ -89,11 +96,15 @@ __all__ = [
     "World",
     "WorldModel",
     "WorldSpec",
+    "MAX_FREE_CELLS",
+    "MAX_WIND_SPEED",
+    "check_free_cells",
     "box_footprint",
     "cfd_wind",
     "cells_clear",
     "default_house",
     "default_world",
+    "draw_gas",
     "figure_problems",
     "generate_house",
     "generated_ontology",

@@ -19,13 +19,13 @@ GENERATOR_REFERENCE_SEEDS = tuple(range(1_000_000, 1_000_020))
 
 @lru_cache(maxsize=2)
 def _cached(seeds: tuple, pseudo_count: float) -> Ontology:
-    from ._generate import generate_house
+    from ._draw_house import draw_house
     from ._house_ontology import house_ontology
 
     k, r = len(HOUSE_CLASSES), len(HOUSE_ROOMS)
     counts = np.zeros((r, k))
     for s in seeds:
-        h = generate_house(s).house
+        h = draw_house(s)[0]  # the house generate_house(s) holds
         inside = h.room_labels >= 0
         rows = np.array([HOUSE_ROOMS.index(n) for n in h.room_names])[h.room_labels[inside]]
         np.add.at(counts, (rows, h.class_map[inside]), 1.0)  # cells of each class in each room type

@@ -46,7 +46,8 @@ def house_ontology(*, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0
 
     * p(o | s, γ): written by hand in ``psgsl_pgm/data/house_gases.yaml`` (smoke: oven 0.40, toaster 0.20,
       microwave 0.15, ...; 5 % on ``other`` so that off-ontology sources stay possible; ethanol: countertop,
-      dining table, refrigerator, sink, toilet, other);
+      dining table, refrigerator, sink, toilet, other; ammonia: toilet, sink, refrigerator, ...; natural gas:
+      oven, countertop, other — the gases of the electronic nose, :class:`psgsl_pgm.sim.ElectronicNose`);
     * p(o) = β and p(o | room): cell frequencies of each class in each room category of *reference* houses
       (``default_house(seed)`` for seeds never used in the evaluation: the same floor plan family, other object
       positions), with ``pseudo_count`` cells of every class added to every room (Dirichlet smoothing: a toaster
@@ -68,7 +69,7 @@ def house_ontology(*, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0
     --------
     >>> ont = house_ontology()
     >>> ont.gases, ont.classes[0]
-    (('smoke', 'ethanol'), 'oven')
+    (('smoke', 'ethanol', 'ammonia', 'natural gas'), 'oven')
     >>> kitchen, bedroom = ont.room_table[ont.rooms.index("Kitchen")], ont.room_table[ont.rooms.index("Bedroom")]
     >>> bool(kitchen[0] > 10 * bedroom[0])          # ovens are far likelier in a kitchen
     True

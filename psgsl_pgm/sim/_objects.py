@@ -29,7 +29,32 @@ __all__ = ["SceneObject", "box_footprint", "load_objects", "save_objects"]
 
 
 def box_footprint(center, size, yaw: float = 0.0) -> np.ndarray:
-    """(4, 2) corners of a rectangle of ``size`` (sx, sy) centred at ``center``, rotated by ``yaw``."""
+    """(4, 2) corners of a rectangle of ``size`` (sx, sy) centred at ``center``, rotated by ``yaw``.
+
+    Parameters
+    ----------
+    center : (2,) array_like of float
+        (x, y) of the rectangle's centre, metres.
+    size : (2,) array_like of float
+        (sx, sy) side lengths before the rotation, metres, both positive.
+    yaw : float
+        Rotation about the centre, radians, counter-clockwise from the x axis.
+
+    Returns
+    -------
+    (4, 2) ndarray of float64
+        The corners, counter-clockwise, metres; a footprint for :class:`SceneObject`.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``center`` or ``size`` not a pair of finite numbers, a side not positive, or ``yaw`` not a finite number.
+
+    Examples
+    --------
+    >>> box_footprint((1.0, 2.0), (0.6, 0.4)).tolist()
+    [[0.7, 1.8], [1.3, 1.8], [1.3, 2.2], [0.7, 2.2]]
+    """
     cx, cy = real_pair(center, "center", "an (x, y)", "metres")
     sx, sy = real_pair(size, "size", "an (sx, sy)", "metres")
     if not (sx > 0 and sy > 0):

@@ -68,12 +68,18 @@ class World:
     source_detector : SourceDetector
         The close-range detector that confirms the source when the robot passes within reach
         (:meth:`detect_source`; default: one that never misses).
+    enose : ElectronicNose or None
+        The electronic nose that classifies the gas of each gas-sensor window (:meth:`sniff`); None: the robot
+        carries none.
+    gas_type : str or None
+        The gas the source emits (the truth, for the metrics only; the robot never reads it). None when the
+        world has no e-nose.
     """
 
     def __init__(self, house: House, wind: WindSequence, gas: FilamentModel, *, camera: Camera,
                  detector: DetectorModel, gas_sensor: GasSensor, anemometer: Anemometer, source_object=None,
                  seed: int = 0, localisation: LocalisationError | None = None, source=None,
-                 source_detector: SourceDetector | None = None):
+                 source_detector: SourceDetector | None = None, enose=None, gas_type: str | None = None):
         self.house = house
         # the source as named (an object's centre or a given point); the gas may be released beside it, where the
         # emitting object meets the air (make_world's gas_obstacles)
@@ -106,6 +112,19 @@ class World:
         self.source_detector = SourceDetector() if source_detector is None else source_detector
         # the source detector's own stream (a fixed spawn key, as the pose's): every other stream draws as without it
         self._rng_source = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(0x5DE7,)))
+        from ._enose import ElectronicNose
+
+        if enose is not None and not isinstance(enose, ElectronicNose):
+            raise TypeError(f"enose must be an ElectronicNose or None, got {type(enose).__name__}")
+        if (enose is None) != (gas_type is None):
+            raise ValueError("enose and gas_type go together: an e-nose classifies the source's gas, gas_type; got "
+                             f"enose={enose!r}, gas_type={gas_type!r}")
+        if enose is not None and gas_type not in enose.gases:
+            raise ValueError(f"gas_type must be one of the e-nose's gases {enose.gases}, got {gas_type!r}")
+        self.enose, self.gas_type = enose, gas_type
+        # the e-nose's own stream (a fixed spawn key): every other stream draws as without it
+        self._rng_enose = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(0xE405,)))
+        self._window_mean = None  # mean true concentration of the last gas-sensor window, ppm (for sniff)
 
     @property
     def source(self) -> np.ndarray:
@@ -229,9 +248,20 @@ class World:
         if self._sensor_time is not None and self.time > self._sensor_time:
             state = sensor.idle(state, self.time - self._sensor_time, rng=self._rng_gas_sensor)
         samples = self.gas.sample(xy, n)  # the clock: one step per sample
+        self._window_mean = float(np.mean(samples))
         reading = sensor.read(samples, dt, initial=state, rng=self._rng_gas_sensor)
         self._sensor_state, self._sensor_time = reading.state, self.time
         return reading
+
+    def sniff(self):
+        """The electronic nose's classification of the last gas-sensor window (:meth:`sense_gas`): a
+        :class:`psgsl_pgm.sim._enose.Smell` of the window's mean concentration at the sensor, the gas being the
+        source's. Draws from the e-nose's own stream only; the clock does not move."""
+        if self.enose is None:
+            raise ValueError("this world has no electronic nose: make it with make_world(enose=..., gas_type=...)")
+        if self._window_mean is None:
+            raise ValueError("sniff classifies the last gas reading: call sense_gas first")
+        return self.enose.classify(self._window_mean, self.gas_type, self._rng_enose)
 
     def sense_wind(self, xy) -> np.ndarray:
         """(2,) anemometer reading at ``xy`` now (the snapshot in force, plus noise).
@@ -376,7 +406,8 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                duration: float = 600.0, camera: Camera | None = None, detector: DetectorModel | None = None,
                gas_sensor=None, anemometer: Anemometer | None = None,
                wind: WindSequence | None = None, localisation: LocalisationError | None = None,
-               gas_obstacles=None, source_detector: SourceDetector | None = None) -> World:
+               gas_obstacles=None, source_detector: SourceDetector | None = None, enose=None,
+               gas_type: str | None = None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
 
     Parameters
@@ -415,6 +446,11 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
     source_detector : SourceDetector, optional, keyword-only
         The close-range source detector (:meth:`World.detect_source`; default: one that never misses). It draws
         from its own random stream.
+    enose : ElectronicNose, optional, keyword-only
+        An electronic nose that classifies each gas-sensor window (:meth:`World.sniff`); default none. It draws
+        from its own random stream.
+    gas_type : str, optional, keyword-only
+        The source's gas, one of ``enose.gases``; required with ``enose`` (and only with it).
 
     Returns
     -------
@@ -459,6 +495,8 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         localisation=localisation,
         source=None if gas_obstacles is None else source,
         source_detector=source_detector,
+        enose=enose,
+        gas_type=gas_type,
     )
     world.advance(warm_up)
     return world

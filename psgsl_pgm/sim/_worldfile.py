@@ -9,7 +9,8 @@ A world file names the files a GSL lab already has; relative paths resolve again
     objects: objects.yaml        # optional: object list (psgsl_pgm.sim.load_objects)
     ontology: ontology.yaml      # this project's format or the lab's (top-level Gases)
     room_classes: ObjectProbByRoom.yaml   # optional: the lab's p(o | room)
-    gas: smoke                   # optional: target gas (default: the experiment's, else the ontology's first)
+    gas: smoke                   # optional: target gas (default: the experiment's, else the ontology's first);
+                                 # 'unknown': each episode's gas is drawn from the ontology's, not told to the robot
     model: realistic             # optional: the world model, ideal (default) or realistic, or ideal+COMPONENT...
                                  # (psgsl_pgm.sim.WorldModel: CFD wind, MOX sensor, occluding camera, pose error)
     source_region: rooms         # where a source may be: rooms (default), free, or a mask image (white = may)
@@ -61,7 +62,20 @@ from ._roommap import load_room_map
 from ._rosmap import load_ros_map
 from ._world_model import WorldModel
 
-__all__ = ["WorldSpec", "default_world", "default_world_path", "load_world", "navigable", "world_files"]
+__all__ = ["MAX_FREE_CELLS", "MAX_WIND_SPEED", "WorldSpec", "check_free_cells", "default_world", "default_world_path",
+           "load_world", "navigable", "world_files"]
+
+#: The most free cells of a world whose estimators and closed loop run (search, experiment, benchmark, replay).
+#: Measured with ``psgsl search`` (one worker, the lab's house B, found radius 0.5 m): 28 909 free cells (0.05 m)
+#: peak at 0.6 GB, 80 148 (0.03 m) at 1.8 GB, 182 188 (0.02 m) fail beyond 3.7 GB; memory grows with the free
+#: cells times the cells within the found radius. 60 000 keeps a run within 2 GB. ``psgsl world check`` runs on
+#: finer maps and warns.
+MAX_FREE_CELLS = 60_000
+
+#: Fastest mean indoor wind a world file may declare, m/s. Indoor air moves at a few tenths of a metre per second
+#: (ASHRAE Standard 55 counts speeds above 0.2 m/s as "elevated air speed"); 5 m/s is a gentle breeze outdoors
+#: (Beaufort force 3, 3.4-5.4 m/s; WMO Manual on Codes, WMO-No. 306). A larger value is a unit or typing slip.
+MAX_WIND_SPEED = 5.0
 
 _KEYS = ("map", "resolution", "rooms", "objects", "ontology", "room_classes", "gas", "source_region",
          "semantic_map", "wind", "start", "sources", "builtin", "clearance", "other_classes", "model")
@@ -89,7 +103,8 @@ class WorldSpec:
         The world file.
     ontology : psgsl_pgm.Ontology
     gas : str or None
-        Target gas named by the file.
+        Target gas named by the file; ``"unknown"``: each episode's gas is drawn from the ontology's gases and the
+        robot is not told it (it carries an electronic nose, :class:`psgsl_pgm.sim.ElectronicNose`).
     wind : dict
         ``{"kind": "potential", "speed", "perturbation"}`` or ``{"kind": "gaden", "sequence": WindSequence}``.
     start : (2,) ndarray or None
@@ -173,11 +188,18 @@ class WorldSpec:
         """
         from ._world import object_at
 
+        named = isinstance(spec, str) and spec in self.sources
         spec = self.source_spec(spec)
         if isinstance(spec, str):
             objs = [o for o in house.objects if _true_class(o) == canonical_class(spec)]
             if not objs:
                 present = sorted({_true_class(o) for o in house.objects})
+                names = list(self.sources)
+                if names and not named:  # a world with named sources: the name was most likely meant as one
+                    objects = f"object classes present: {present}" if present else "the house has no objects"
+                    raise ValueError(f"source {spec!r} is neither a source of the world nor an object class of the "
+                                     f"house{_did_you_mean(spec, names + present)}; the world's sources: {names}; "
+                                     f"{objects}")
                 raise ValueError(f"source class {spec!r} has no object in the house{_did_you_mean(spec, present)}; "
                                  f"classes present: {present}")
             return objs[0].center.copy(), objs[0]
@@ -417,8 +439,9 @@ def _load(wpath: Path, where: str, data: dict) -> WorldSpec:
         except (ValueError, TypeError, FileNotFoundError) as exc:
             raise _inner(where, "ontology" if rpath is None else "ontology/room_classes", exc) from None
     gas = data.get("gas")
-    if gas is not None and gas not in ontology.gases:
-        raise ValueError(f"{where}: key 'gas': {gas!r} is not a gas of the ontology {list(ontology.gases)}")
+    if gas is not None and gas not in ontology.gases and gas != "unknown":
+        raise ValueError(f"{where}: key 'gas': {gas!r} is not a gas of the ontology {list(ontology.gases)} nor "
+                         "'unknown'")
 
     # the house
     house, object_classes, map_path = None, (), None
@@ -515,6 +538,7 @@ def _load_house(wpath: Path, where: str, data: dict, ontology):
     factor = coarsen_factor(fine.resolution, res, where=f"{where}: key 'resolution'")
     grid = coarsen_occupancy(fine, factor)
     labels = coarsen_labels(fine_labels, len(names), factor)
+    _check_rooms_kept(where, fine_labels, labels, names, fine.resolution, res)
     objects, classes_seen = [], []
     if "objects" in data:
         opath = _file(wpath, data, "objects")
@@ -536,6 +560,21 @@ def _load_house(wpath: Path, where: str, data: dict, ontology):
     return house, tuple(dict.fromkeys(classes_seen)), mpath
 
 
+def _check_rooms_kept(where: str, fine_labels, labels, names, fine_res: float, res: float) -> None:
+    """ValueError naming ``resolution`` when a room of the room map keeps no cell of the working grid: the cells are
+    coarser than the rooms (every later check — windows, sources — would fail for that reason)."""
+    lost = [n for i, n in enumerate(names) if (fine_labels == i).any() and not (labels == i).any()]
+    if not lost:
+        return
+    areas = {n: float((fine_labels == i).sum()) * fine_res**2 for i, n in enumerate(names) if (fine_labels == i).any()}
+    small = min(areas.values())
+    side = max(fine_res, np.floor(np.sqrt(small) / 3 / fine_res) * fine_res)  # three cells across the smallest
+    side = float(np.format_float_positional(side, precision=6))
+    raise ValueError(f"{where}: key 'resolution': cells of {res:g} m are coarser than the rooms: "
+                     f"{', '.join(lost)} keep{'s' if len(lost) == 1 else ''} no cell (the smallest room has "
+                     f"{small:.2f} m²); use a resolution of at most {side:g} m")
+
+
 def _load_wind(wpath: Path, where: str, wind, probe: House, builtin: bool) -> dict:
     if not isinstance(wind, dict):
         raise ValueError(f"{where}: key 'wind' must be a mapping (speed + windows, or gaden_csv + height), got {wind!r}")
@@ -550,6 +589,9 @@ def _load_wind(wpath: Path, where: str, wind, probe: House, builtin: bool) -> di
     allowed = _WIND_POTENTIAL if not builtin else ("speed", "perturbation")
     check_keys(f"{where}: key 'wind'", wind, required=("speed",), optional=allowed)
     speed = number(where, "wind.speed", wind["speed"], positive=True)
+    if speed > MAX_WIND_SPEED:
+        raise ValueError(f"{where}: key 'wind.speed': {speed:g} m/s is no indoor wind (at most {MAX_WIND_SPEED:g} m/s; "
+                         "indoor air moves at tenths of a metre per second): give the mean speed in m/s")
     pert = number(where, "wind.perturbation", wind.get("perturbation", 0.3), nonnegative=True)
     return {"kind": "potential", "speed": speed, "perturbation": pert}
 
@@ -635,6 +677,55 @@ def _load_sources(where: str, sources) -> dict:
     return out
 
 
+def check_free_cells(spec: WorldSpec, seed: int = 0, *, limit: int = MAX_FREE_CELLS) -> None:
+    """ValueError naming the world's ``resolution`` when its house has more free cells than ``limit``
+    (:data:`MAX_FREE_CELLS`: the estimators and the closed loop would need more than 2 GB), with the resolution
+    that fits.
+
+    Parameters
+    ----------
+    spec : WorldSpec
+        The world (its map and ``resolution``).
+    seed : int
+        The seed of the house to count (a world file's house is the same for every seed).
+    limit : int, keyword-only
+        The most free cells allowed.
+
+    Raises
+    ------
+    ValueError
+        More free cells than ``limit``; the message names ``resolution`` and a value that fits.
+    """
+    house = spec.house(seed)
+    g = house.grid
+    free = int(g.free.sum())
+    if free <= limit:
+        return
+    factor = int(np.ceil(np.sqrt(free / limit)))
+    while free / factor**2 > limit:
+        factor += 1
+    raise ValueError(f"{spec.path}: key 'resolution': {free:,} free cells of {g.resolution:g} m are more than the "
+                     f"{limit:,} the estimators and the closed loop run on within 2 GB of memory; set 'resolution: "
+                     f"{float(np.format_float_positional(g.resolution * factor, precision=6)):g}' (or coarser) in the "
+                     "world file")
+
+
+def _on_furniture(where: str, name: str, xy, house: House, region) -> str:
+    """The message for a source on an occupied cell inside a room: furniture the map draws as occupied."""
+    import scipy.ndimage as ndi
+
+    g = house.grid
+    rc = g.world_to_cell(xy)
+    room = house.room_names[int(house.room_labels[rc[0], rc[1]])]
+    _, (ri, ci) = ndi.distance_transform_edt(~region, return_indices=True)
+    near = g.cell_to_world(np.array([[ri[rc[0], rc[1]], ci[rc[0], rc[1]]]]))[0]
+    return (f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies on furniture: an occupied cell of the "
+            f"map inside the room {room} (the map draws furniture as occupied, and a source must lie in a free "
+            f"cell); use a walls-only map with the furniture listed under 'objects' (then 'sources.{name}' may name "
+            f"the emitting object's class), or move the source to the nearest free cell of the source region, "
+            f"({near[0]:.2f}, {near[1]:.2f})")
+
+
 def _check_positions(where: str, spec: WorldSpec, house: House) -> None:
     g = house.grid
     start = spec.start_for(house)
@@ -655,6 +746,8 @@ def _check_positions(where: str, spec: WorldSpec, house: House) -> None:
         rc = g.world_to_cell(xy)
         if not g.contains(rc):
             raise ValueError(f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies outside the map {g.extent}")
+        if not region[rc[0], rc[1]] and g.occupancy[rc[0], rc[1]] and house.room_labels[rc[0], rc[1]] >= 0:
+            raise ValueError(_on_furniture(where, name, xy, house, region))
         if not region[rc[0], rc[1]]:
             raise ValueError(f"{where}: key 'sources.{name}' ({xy[0]:g}, {xy[1]:g}) lies outside the source region "
                              f"({spec.source_region if isinstance(spec.source_region, str) else 'mask'}) or on a wall")

@@ -1,7 +1,7 @@
 """How wrong is p(o_ni | s_c) ≈ p(o_ni)? The paper's approximation against the exact posterior, versus n.
 
-With the class prior ρ = β = p(o | ¬s) the closed form (eqs. ``prob-semantics-final`` and
-``combined-conditionals``) is exact in Network A; with the marginal ρ = p(o) = L/n + (1 − 1/n) β it is the
+With the class prior ρ = β = p(o | ¬s) the closed form (eqs. (20) and
+(11)) is exact in Network A; with the marginal ρ = p(o) = L/n + (1 − 1/n) β it is the
 paper's approximation, whose total-variation error shrinks like 1/n (``proofs/check_marginal_approximation.py``).
 """
 

@@ -31,3 +31,30 @@ def test_other_errors_are_not_reported_as_usage():
         reporting_usage_errors(_raising(FileNotFoundError("a.yaml")), None)
     with pytest.raises(UsageError, match="a.yaml"):
         reporting_usage_errors(_raising(FileNotFoundError("a.yaml")), None, errors=(ValueError, FileNotFoundError))
+
+
+def test_quiet_before_the_command_is_the_commands_quiet(monkeypatch):
+    """``psgsl --quiet`` runs the demo without a progress bar; ``psgsl --quiet COMMAND`` passes it on."""
+    import argparse
+
+    import psgsl_pgm.cli._main as cli
+
+    seen = []
+
+    def fake(args):
+        seen.append((args.command, args.quiet))
+        return 0
+
+    build = cli.build_parser
+
+    def parser():
+        p = build()
+        sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
+        for name in ("demo", "replay"):
+            sub.choices[name].set_defaults(func=fake)
+        return p
+
+    monkeypatch.setattr(cli, "build_parser", parser)
+    assert cli.main(["--quiet"]) == 0 and cli.main([]) == 0
+    assert cli.main(["--quiet", "replay", "bag"]) == 0 and cli.main(["replay", "bag"]) == 0
+    assert seen == [("demo", True), ("demo", False), ("replay", True), ("replay", False)]

@@ -166,3 +166,29 @@ def test_the_nearest_object_baseline_runs_from_the_command_line(tmp_path):
     group = json.loads((out / "oven-infotaxis" / "summary.json").read_text())
     assert set(group) == {"nearest-object/semantics+rooms"}
     assert group["nearest-object/semantics+rooms"]["success_rate"]["value"] == 1.0
+
+
+def test_how_runs_end_is_stored_and_a_grid_of_the_other_rule_is_refused(tmp_path, capsys):
+    from psgsl_pgm.search import load_search_run
+
+    out = tmp_path / "s"
+    argv = ["search", "--sources", "oven", "--policies", "nearest-object", "--variants", "semantics+rooms",
+            "--seeds", "1", "--budget", "200", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv) == 0
+    (path,) = (out / "runs").iterdir()
+    run = load_search_run(path)
+    assert run.config["search"]["end"] == "declare" and run.declared and run.declared_correct
+    s = json.loads((out / "summary.json").read_text())["oven/infotaxis"]["nearest-object/semantics+rooms"]
+    assert s["end"] == "declare" and s["declared_success"]["value"] == 1.0 and s["declared"] == 1
+    assert s["false_declaration_rate"]["value"] == 0.0 and s["declared_error"]["median"] <= 1.0
+    capsys.readouterr()
+    assert main(argv + ["--end", "reach"]) == 2  # runs of the other rule never resume into this grid
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "computed with other settings" in err[0]
+    reach = tmp_path / "r"
+    assert main(argv[:-1] + [str(reach), "--end", "reach"]) == 0
+    s = json.loads((reach / "summary.json").read_text())["oven/infotaxis"]["nearest-object/semantics+rooms"]
+    assert s["end"] == "reach" and s["declared_success"] is None and s["success_rate"]["value"] == 1.0
+    with pytest.raises(SystemExit) as exc:
+        main(argv + ["--end", "found"])
+    assert exc.value.code == 2

@@ -226,6 +226,11 @@ class Browser:
                     f"request failed: {url}: {params.get('errorText')}")
         return errors, offline
 
+    def requests(self) -> list[str]:
+        """Every URL the page requested since it was opened (documents, scripts, styles, fonts, images, XHR)."""
+        return [event["params"]["request"]["url"] for event in self.events
+                if event.get("method") == "Network.requestWillBeSent"]
+
     def close(self) -> None:
         """Stop the browser this object started (by its process id) and wait for it."""
         if self._ws is not None:

@@ -21,6 +21,15 @@ def test_the_guide_has_python_examples():
     assert len(BLOCKS) >= 4, [f"{p.relative_to(DOCS)}#{i}" for p, i, _ in BLOCKS]
 
 
+GUIDES = [DOCS / "getting-started.md", *sorted(p for p in (DOCS / "guide").glob("*.md") if p.name != "index.md")]
+
+
+@pytest.mark.parametrize("page", GUIDES, ids=[p.stem for p in GUIDES])
+def test_every_guide_shows_runnable_python(page):
+    """Each guide page (and getting started) holds at least one ```python block, which the test below runs."""
+    assert any(p == page for p, _, _ in BLOCKS), f"{page.relative_to(DOCS)} has no ```python block"
+
+
 @pytest.mark.parametrize("page,index,block", BLOCKS,
                          ids=[f"{p.relative_to(DOCS).with_suffix('')}-{i}" for p, i, _ in BLOCKS])
 def test_docs_python_block_runs(page, index, block, tmp_path, monkeypatch):

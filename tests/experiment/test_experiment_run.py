@@ -64,7 +64,7 @@ def test_before_any_frame_camera_semantics_is_uninformative(short_run):
 
 def test_run_equals_an_independent_pipeline_built_from_the_public_parts(short_run):
     """Rebuild the run from the same seed: walk the tour, the robot's wind estimate and detector model, olfactory
-    estimator, two class-belief maps, eq. prob-semantics-final, fusion (eq. combined-conditionals) — the
+    estimator, two class-belief maps, eq. (20), fusion (eq. (11)) — the
     posteriors agree to 1e-12."""
     from dataclasses import replace
 
@@ -138,7 +138,7 @@ def test_run_search_rejects_bad_arguments():
     with pytest.raises(ValueError, match="source class 'piano' has no object"):
         run_search("piano", 0)
     with pytest.raises(ValueError, match="gas must be one of"):
-        run_search("oven", 0, config=ExperimentConfig(gas="ammonia"), tour=None)
+        run_search("oven", 0, config=ExperimentConfig(gas="chlorine"), tour=None)
     with pytest.raises(ValueError, match="snapshot_at must hold fractions"):
         run_search("oven", 0, snapshot_at=(1.5,))
     with pytest.raises(ValueError, match="speed must be a positive finite number, got 0.0"):

@@ -91,5 +91,7 @@ def test_experiment_command_bad_world_one_line_exit_2(tmp_path, capsys):
     world = write_flat(tmp_path)
     assert main(["experiment", "--world", str(world), "--sources", "toaster", "--out", str(tmp_path / "o"),
                  "--quiet"]) == 2
-    assert "source class 'toaster' has no object" in capsys.readouterr().err
+    err = capsys.readouterr().err  # an unknown name: the world's own sources are listed
+    assert "source 'toaster' is neither a source of the world nor an object class of the house" in err
+    assert "the world's sources: ['corner', 'stove']" in err
     assert not (tmp_path / "o").exists()

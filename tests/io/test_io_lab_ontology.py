@@ -1,14 +1,14 @@
 """The lab's ontology formats (ontology.yaml with Gases, ObjectProbByRoom.yaml) and the COCO alias table."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from psgsl_pgm import Ontology, semantic_source_probability
 from psgsl_pgm.io._coco import COCO_CLASSES, canonical_class
 
-SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B"
+from tests.sim.house_b import house_b_folder
+
+SHARED = house_b_folder()
 
 LAB = """Gases:
   - gas: smoke

@@ -261,3 +261,20 @@ def test_log_conditioning_is_the_sum_of_the_not_found_factors_and_reset_forgets_
     assert not est.log_conditioning.flags.writeable
     est.reset()
     np.testing.assert_array_equal(est.log_conditioning, np.zeros((6, 8)))
+
+
+def test_hit_residuals_use_the_missed_hit_rate():
+    """r_n = (g_n − p_n) / sqrt(p_n (1 − p_n)) with p_n = ε + (1 − ε)(1 − δ)(1 − exp(−κ c_n)): δ changes them."""
+    from types import SimpleNamespace
+
+    from psgsl_pgm.olfaction import PlumeFit, hit_residuals
+
+    c = np.array([0.0, 0.5, 2.0, 8.0])
+    run = SimpleNamespace(predicted=lambda d, t: c, hits=np.array([False, True, False, True]))
+    eps, kappa, delta = 0.02, 0.7, 0.3
+    fit = PlumeFit(0.01, 30.0, kappa, -1.0, missed_hit_rate=delta)
+    p = eps + (1 - eps) * (1 - delta) * (1 - np.exp(-kappa * c))
+    expected = (run.hits - p) / np.sqrt(p * (1 - p))
+    np.testing.assert_allclose(hit_residuals([run], fit, false_hit_rate=eps)[0], expected, rtol=1e-12)
+    plain = hit_residuals([run], PlumeFit(0.01, 30.0, kappa, -1.0), false_hit_rate=eps)[0]
+    assert not np.allclose(plain, expected)

@@ -77,13 +77,35 @@ def test_unknown_message_type(tmp_path):
         read_bag(tmp_path / "acme")
 
 
-def test_pose_that_never_covers_a_reading(tmp_path):
+def test_readings_outside_the_streams_overlap_are_skipped_and_counted(tmp_path):
     bag = episode_bag(tmp_path / "bag")
     start = 1_700_000_000 * 10**9
     cut = rewrite(bag, tmp_path / "cut", keep=lambda topic, t, m: topic != "/tf" or t < start + 6 * 10**9)
-    with pytest.raises(ValueError, match=r"cut: topic /tf \(map -> base_link\): no sample within the tolerance 0.5 s "
-                                         r"on both sides of t = 6.000 s into the bag"):
-        read_bag(cut)
+    data = read_bag(cut)  # /tf stops at 5 s: the gas and wind readings at 6-9 s have no pose
+    np.testing.assert_array_equal(data.gas_t - start, np.arange(6) * 10**9)
+    assert data.skipped == {"gas": 4, "wind": 4, "detections": 2}  # the frames at 6 and 9 s too
+    # the case: the wind starts 10 ms before the first /tf, the last gas reading comes after the last wind
+    def shift(topic, t, msg):
+        if topic == "/wind" and t == start:
+            stamp = dataclasses.replace(msg.header.stamp, sec=msg.header.stamp.sec - 1, nanosec=990_000_000)
+            return dataclasses.replace(msg, header=dataclasses.replace(msg.header, stamp=stamp))
+        return msg
+
+    early = rewrite(bag, tmp_path / "early", change=shift, keep=lambda topic, t, m: topic != "/wind" or t < start + 9 * 10**9)
+    data = read_bag(early)
+    assert data.skipped == {"gas": 2, "wind": 1, "detections": 0}  # gas at 0 s (no wind before it) and at 9 s
+    np.testing.assert_array_equal(data.gas_t - start, np.arange(1, 9) * 10**9)
+    def apart(topic, t, m):  # the pose for 0-1 s, the wind from 3 s on: nothing overlaps
+        return not (topic == "/tf" and t > start + 10**9 or topic == "/wind" and t < start + 3 * 10**9)
+
+    nothing = rewrite(bag, tmp_path / "nothing", keep=apart)
+    with pytest.raises(ValueError, match=r"nothing: topic /gas: no gas reading lies where the streams overlap \(gas "):
+        read_bag(nothing)
+
+
+def test_pose_gap_inside_the_overlap(tmp_path):
+    bag = episode_bag(tmp_path / "bag")
+    start = 1_700_000_000 * 10**9
     # a gap: samples 2 s apart around a reading are beyond a 0.5 s tolerance, within a 1.5 s one
     gap = rewrite(bag, tmp_path / "gap", keep=lambda topic, t, m: topic != "/tf" or t != start + 3 * 10**9)
     with pytest.raises(ValueError, match=r"gap: topic /tf .* t = 3.000 s into the bag .*1.000 s before and 1.000 s"):

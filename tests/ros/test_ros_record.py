@@ -47,3 +47,21 @@ def test_closed_loop_record_holds_the_driven_path(tmp_path):
     counts = {topics[k]: v for k, v in counts.items()}
     assert counts["/posterior/semantics+rooms"] == run.n_steps + 1
     assert counts["/robot/next"] == run.n_steps  # the pose chosen after every step but the last
+
+
+def test_closed_loop_record_of_the_olfaction_variant_has_no_class_grid(tmp_path):
+    """The olfaction variant keeps no class beliefs: its episode records without a best-class grid (it once ended
+    in StopIteration), and the bag still holds every reading."""
+    from mcap.reader import make_reader
+
+    from psgsl_pgm.search import SearchConfig
+    from psgsl_pgm.search._grid import closed_loop_in_world
+
+    run = closed_loop_in_world("oven", 0, "infotaxis", "olfaction", "infotaxis",
+                               config=ExperimentConfig(warm_up=5.0), search=SearchConfig(time_budget=15.0),
+                               record=str(tmp_path / "run"))
+    data = read_bag(tmp_path / "run.bag")
+    assert len(data.gas) == run.n_steps > 0
+    with open(tmp_path / "run.mcap", "rb") as fh:
+        topics = {c.topic for c in make_reader(fh).get_summary().channels.values()}
+    assert "/posterior/olfaction" in topics and "/semantics/best_class" not in topics

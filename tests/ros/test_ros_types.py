@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -18,7 +17,9 @@ from psgsl_pgm.ros._types import (
     typestore,
 )
 
-LAB = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "olfaction_msgs"
+from tests.sim.house_b import shared_data  # noqa: E402
+
+LAB = shared_data("olfaction_msgs")
 
 
 @pytest.mark.parametrize("name, typ", [("GasSensor.msg", GAS_SENSOR), ("Anemometer.msg", ANEMOMETER)])

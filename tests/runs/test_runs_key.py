@@ -130,3 +130,15 @@ def test_the_embedded_house_has_a_key_with_its_settings():
     key = world_key(None)
     assert key["world.builtin"] == "default_house" and key["world.wind.speed"] == 0.2
     assert not any(v.startswith("sha256") for v in key.values() if isinstance(v, str))  # it names no file
+
+
+def test_file_hash_reads_the_whole_file(tmp_path):
+    """Two files equal in their first MiB and different after it hash differently; the hash is the whole file's."""
+    import hashlib
+
+    head = bytes(range(256)) * 4096  # exactly 1 MiB
+    a, b = tmp_path / "a.bin", tmp_path / "b.bin"
+    a.write_bytes(head + b"tail one")
+    b.write_bytes(head + b"tail two")
+    assert file_sha256(a) != file_sha256(b)
+    assert file_sha256(a) == "sha256 " + hashlib.sha256(a.read_bytes()).hexdigest()

@@ -218,3 +218,45 @@ def test_a_seeded_episode_is_bit_reproducible(house_space):
     for name in ("time", "position", "heading", "hit", "error", "path", "final_posterior"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert (a.found, a.time_to_find) == (b.found, b.time_to_find)
+
+
+def test_found_rule_memory_is_bounded_by_blocks_not_by_cells_times_footprint(monkeypatch):
+    """A 1-cm map: 60 000 robot positions against a 3 600-cell footprint would need 3.5 GB compared at once; the
+    rule compares them in blocks (32 MiB) and gives the same answers as one block does."""
+    import tracemalloc
+
+    from psgsl_pgm import GridMap
+    from psgsl_pgm.search import _detection
+
+    grid = GridMap(np.zeros((300, 200), dtype=bool), 0.01)  # 3 m x 2 m at 1 cm: 60 000 cells
+    footprint = np.zeros(grid.shape, dtype=bool)
+    footprint[120:180, 70:130] = True  # a 0.6 m x 0.6 m oven: 3 600 cells
+    model = DetectionModel(grid, 0.5, footprints=[footprint])
+    points = grid.cell_centres().reshape(-1, 2)
+    oven = int(np.flatnonzero(footprint.ravel())[0])
+    tracemalloc.start()
+    try:
+        found = model.found(points, oven)
+        near = model.near_footprints(points[::7])
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 200 * 2**20, f"peak {peak / 2**20:.0f} MiB"
+    # the same answers in blocks of one point: block size does not change a comparison
+    monkeypatch.setattr(_detection, "_PAIRS_AT_ONCE", 1)
+    np.testing.assert_array_equal(model.found(points[::97], oven), found[::97])
+    np.testing.assert_array_equal(model.near_footprints(points[::7][::13]), near[::13])
+    x = np.array([[1.0, 1.5], [0.2, 0.2], [1.6, 2.9]])  # distance to the oven's nearest cell centre, brute force
+    d = np.sqrt(((x[:, None] - points[footprint.ravel()][None]) ** 2).sum(-1)).min(axis=1)
+    np.testing.assert_array_equal(model.found(x, oven), d <= 0.5)
+
+
+def test_rows_in_blocks_equal_rows_at_once(monkeypatch, house):
+    from psgsl_pgm.search import _detection
+
+    model = DetectionModel.from_house(house, 0.6)
+    pts = house.grid.cell_centres().reshape(-1, 2)[::37]
+    whole = model.rows(pts)
+    monkeypatch.setattr(_detection, "_PAIRS_AT_ONCE", 50)  # blocks of one point
+    blocks = DetectionModel.from_house(house, 0.6).rows(pts)
+    assert (whole != blocks).nnz == 0 and whole.nnz > 0

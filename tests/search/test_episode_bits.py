@@ -81,12 +81,12 @@ def test_seeded_episodes_are_the_recorded_ones_bit_for_bit(case):
 def test_branch_and_bound_picks_the_exhaustive_arg_max_along_an_episode(monkeypatch):
     """At every decision of a seeded episode (both semantic and olfaction-only beliefs): the same cell, heading,
     path and score as scoring every candidate with infotaxis_gain, and every bound above its value."""
-    from psgsl_pgm.search import _loop, _policies
+    from psgsl_pgm.search import _choose, _policies, _stepper
 
     checked = []
 
     def exhaustive_too(policy, sit):
-        dec = _policies.choose(policy, sit)
+        dec = _choose.choose(policy, sit)
         cells, drive, pred, tau = _policies._candidates(sit)
         ref = _policies._best(_policies._score(sit, _policies.infotaxis_gain(sit, cells), tau), cells, pred, drive,
                               sit)
@@ -99,7 +99,7 @@ def test_branch_and_bound_picks_the_exhaustive_arg_max_along_an_episode(monkeypa
         checked.append(sit.variant)
         return dec
 
-    monkeypatch.setattr(_loop, "choose", exhaustive_too)
+    monkeypatch.setattr(_stepper, "choose", exhaustive_too)  # the loop's per-stop code
     for seed, variant in ((3, "semantics+rooms"), (4, "olfaction")):
         run_closed_loop("bed", seed, "infotaxis", variant, search=SearchConfig(found_radius=1e-3, time_budget=60.0))
     assert checked.count("semantics+rooms") >= 5 and checked.count("olfaction") >= 5

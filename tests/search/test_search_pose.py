@@ -84,11 +84,11 @@ def test_the_success_rule_reads_the_true_path(house_space):
 
 
 def test_no_policy_reads_the_true_pose(house_space):
-    """Only the success rule (``found_on`` of the loop) may map the robot's path to the true one."""
+    """Only the success rule (``_found_on`` of the loop's stepping object) may map the robot's path to the true one."""
     _, space = house_space
 
     def oracle(frame):
-        return frame.f_globals.get("__name__") == "psgsl_pgm.search._loop" and frame.f_code.co_name == "found_on"
+        return frame.f_globals.get("__name__") == "psgsl_pgm.search._stepper" and frame.f_code.co_name == "_found_on"
 
     world = guard_true_pose(_world(1, "bed", localisation=LocalisationError()), allow=oracle)
     run = run_closed_loop("bed", 1, "infotaxis", "semantics", search=SearchConfig(time_budget=30.0), space=space,

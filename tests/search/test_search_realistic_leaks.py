@@ -24,7 +24,7 @@ def test_no_robot_code_reads_the_realistic_worlds_truth():
     world.gas_sensor = _LoopMOX()  # the same sensor (defaults), its parameters readable by the simulator only
 
     def oracle(frame):  # the success rule maps the believed path to the true one
-        return frame.f_globals.get("__name__") == "psgsl_pgm.search._loop" and frame.f_code.co_name == "found_on"
+        return frame.f_globals.get("__name__") == "psgsl_pgm.search._stepper" and frame.f_code.co_name == "_found_on"
 
     world = guard_true_pose(world, allow=oracle)
     run = run_closed_loop("oven", 100, "infotaxis", "semantics+rooms", config=config, world=world,

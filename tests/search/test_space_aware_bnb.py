@@ -7,12 +7,13 @@ import pytest
 
 from psgsl_pgm.search import SearchConfig, run_closed_loop
 from psgsl_pgm.search import _policies as P
+from psgsl_pgm.search._choose import choose
 
 
 def _check(sit):
     """Assert the branch-and-bound decision is the exhaustive one and the bounds hold; the share of candidates
     whose bound could beat the winner."""
-    dec = P.choose("space-aware-infotaxis", sit)
+    dec = choose("space-aware-infotaxis", sit)
     cells, drive, pred, tau = P._candidates(sit)
     gain = P.space_aware_gain(sit, cells)
     ref = P._best(P._score(sit, gain, tau), cells, pred, drive, sit)
@@ -26,16 +27,16 @@ def _check(sit):
 
 
 def _along(monkeypatch, runs):
-    from psgsl_pgm.search import _loop
+    from psgsl_pgm.search import _stepper
 
     shares, sits = [], []
 
     def exhaustive_too(policy, sit):
         shares.append(_check(sit))
         sits.append(sit)
-        return P.choose(policy, sit)
+        return choose(policy, sit)
 
-    monkeypatch.setattr(_loop, "choose", exhaustive_too)
+    monkeypatch.setattr(_stepper, "choose", exhaustive_too)  # the loop's per-stop code
     for args, kwargs in runs:
         run_closed_loop(*args, **kwargs)
     return shares, sits

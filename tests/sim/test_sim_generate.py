@@ -200,8 +200,8 @@ def test_drawn_area_has_the_per_room_floor(monkeypatch):
     the draw is caught at the plan's call)."""
     from scipy import stats
 
-    from psgsl_pgm.sim import _generate
-    from psgsl_pgm.sim._generate import AREA_PER_ROOM
+    from psgsl_pgm.sim import _draw_house
+    from psgsl_pgm.sim._draw_house import AREA_PER_ROOM
 
     seen = []
 
@@ -212,7 +212,7 @@ def test_drawn_area_has_the_per_room_floor(monkeypatch):
         seen.append((len(room_types), area))
         raise Drawn
 
-    monkeypatch.setattr(_generate, "draw_plan", catch)
+    monkeypatch.setattr(_draw_house, "draw_plan", catch)
     for seed in range(300):
         with pytest.raises(Drawn):
             generate_house(seed, n_rooms=8 if seed % 2 else None)

@@ -1,8 +1,6 @@
 """Grid map frame conversions and the loaders (ROS maps, room maps, object lists): round trips, the real
 house of ../shared, and clear errors for bad files."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import yaml
@@ -20,7 +18,9 @@ from psgsl_pgm.sim import (
     save_room_map,
 )
 
-SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B"
+from tests.sim.house_b import house_b_folder
+
+SHARED = house_b_folder()
 
 
 # ---- GridMap -------------------------------------------------------------------------------------------------

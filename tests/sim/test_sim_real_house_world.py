@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 import yaml
 
-SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "mapir_house_B"
+from tests.sim.house_b import house_b_folder
+
+SHARED = house_b_folder()
 
 pytestmark = [pytest.mark.shared_data,
               pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/mapir_house_B is absent")]
@@ -155,3 +157,106 @@ def test_typos_in_the_labs_files_are_refused(tmp_path, capsys):
     (tmp_path / "onto_typo.yaml").write_text(onto)
     assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_typo.yaml"))]) == 2
     assert "expected key 'Gases' (the lab's layout" in capsys.readouterr().err
+    # a class spelled differently in the ontology and the room table: the room's 'microwave' would be an 'other'
+    onto = (SHARED / "ontology.yaml").read_text().replace("microwave", "microwve")
+    (tmp_path / "onto_microwve.yaml").write_text(onto)
+    assert main(["world", "check", str(write_real_world(tmp_path, ontology="onto_microwve.yaml"))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ("key 'room_categories.Kitchen': class 'microwave' is not one of the ontology's "
+                                     "classes, so it would count as 'other' — did you mean the ontology's 'microwve'?"
+                                     in err)
+
+
+def test_a_source_found_at_the_start_is_refused_by_check_and_search_alike(tmp_path, capsys):
+    """B4 lies 0.2 m from the lab's start, within the 0.5 m found radius: world check and search refuse it in one
+    line (a search would end before its first reading), and search writes nothing."""
+    from psgsl_pgm.cli._main import main
+
+    path = write_real_world(tmp_path, sources={"B4": [-3.2, -3.3]})
+    out = tmp_path / "out"
+    assert main(["world", "check", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "source 'B4' is found at the start: the start (-3, -3.3) is 0.20 m from it" in err[0]
+    assert main(["search", "--world", str(path), "--sources", "B4", "--seeds", "1", "--policies", "greedy",
+                 "--variants", "olfaction", "--workers", "1", "--quiet", "--out", str(out)]) == 2
+    assert "is found at the start" in capsys.readouterr().err and not out.exists()
+    # below the distance, it is a source like any other
+    assert main(["world", "check", str(path), "--found-radius", "0.15"]) == 0
+
+
+def test_the_example_world_file_of_house_b_checks(tmp_path, capsys):
+    """examples/house_b: the world file, its walls map YAML and object list, pointed at the lab's folder (the
+    prefix replaced as its README says), pass world check with every source; the folder holds none of the lab's
+    files."""
+    import shutil
+
+    from psgsl_pgm.cli._main import main
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "house_b"
+    assert sorted(p.name for p in example.iterdir()) == ["ABOUT.md", "objects.yaml", "walls.yaml", "world.yaml"]
+    for name in ("world.yaml", "walls.yaml"):
+        text = (example / name).read_text()
+        assert "../../../shared/data/mapir_house_B" in text
+        (tmp_path / name).write_text(text.replace("../../../shared/data/mapir_house_B", str(SHARED)))
+    shutil.copy(example / "objects.yaml", tmp_path)
+    assert main(["world", "check", str(tmp_path / "world.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "grid: 114 x 87 cells of 0.1 m" in out
+    for name, room in (("B1", "Kitchen"), ("B2", "Bathroom"), ("B3", "LivingRoom")):
+        assert f"source {name}: " in out and f"in {room}" in out.split(f"source {name}: ")[1].splitlines()[0]
+
+
+def test_a_source_on_furniture_says_so_and_what_to_do(tmp_path, capsys):
+    """The lab's furnished map draws furniture as occupied: B2 and B3 lie on it. The message says furniture (not
+    a wall), names the room and offers the walls-only map with objects, or the nearest free cell."""
+    from psgsl_pgm.cli._main import main
+
+    path = write_real_world(tmp_path, map=str(SHARED / "_occupancy.yaml"), sources={"B2": [-0.4, -2.9]})
+    assert main(["world", "check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert ("key 'sources.B2' (-0.4, -2.9) lies on furniture: an occupied cell of the map inside the room Bathroom"
+            in err)
+    assert "use a walls-only map with the furniture listed under 'objects'" in err
+    near = [float(v) for v in err.rsplit("(", 1)[1].rstrip(")\n").split(", ")]
+    from psgsl_pgm import load_world
+
+    path = write_real_world(tmp_path, map=str(SHARED / "_occupancy.yaml"), sources={"B2": near})
+    assert load_world(path).sources["B2"] == tuple(near) or list(load_world(path).sources["B2"]) == near
+
+
+def _without_resolution(tmp_path):
+    path = write_real_world(tmp_path)
+    world = yaml.safe_load(path.read_text())
+    del world["resolution"]  # the map's own 1-cm cells
+    path.write_text(yaml.safe_dump(world, sort_keys=False))
+    return path
+
+
+def test_the_1cm_house_is_refused_by_the_runs_naming_resolution(tmp_path, capsys):
+    from psgsl_pgm.cli._main import main
+
+    path = _without_resolution(tmp_path)
+    out = tmp_path / "out"
+    assert main(["search", "--world", str(path), "--sources", "B1", "--seeds", "1", "--quiet", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "key 'resolution': 731,682 free cells of 0.01 m are more than the 60,000" in err[0]
+    assert "set 'resolution: 0.04' (or coarser)" in err[0] and not out.exists()
+
+
+@pytest.mark.slow
+def test_world_check_of_the_1cm_house_stays_within_2_gb(tmp_path):
+    """``world check`` at the lab's 1-cm cells runs (its found rule in bounded blocks), within 2 GB, and warns that
+    the runs need a coarser resolution (about 2 minutes on a 2-core machine)."""
+    import resource
+    import subprocess
+    import sys
+
+    path = _without_resolution(tmp_path)
+    repo = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-m", "psgsl_pgm", "world", "check", str(path)], cwd=repo,
+                          capture_output=True, text=True, env={**__import__("os").environ, "PYTHONPATH": str(repo)})
+    assert done.returncode == 0, done.stderr
+    assert "warning: 731,682 free cells: search, experiment, benchmark and replay refuse" in done.stdout
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024  # bytes (Linux reports KiB)
+    assert peak < 2 * 2**30, f"peak {peak / 2**30:.2f} GiB"

@@ -78,6 +78,6 @@ def test_public_names():
         obj = getattr(sim, name)
         if callable(obj):
             assert obj.__module__.startswith("psgsl_pgm."), (name, obj.__module__)
-        else:  # the constants: class and room names, confusion groups
-            assert isinstance(obj, (str, tuple)) and obj, (name, obj)
+        else:  # the constants: class and room names, confusion groups, limits
+            assert isinstance(obj, (str, tuple, int, float)) and not isinstance(obj, bool) and obj, (name, obj)
     assert sim.GridMap is psgsl_pgm.GridMap and sim.cells_clear is psgsl_pgm.geometry._sight.cells_clear

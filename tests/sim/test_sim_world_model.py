@@ -105,11 +105,13 @@ def test_cli_names_the_missing_solver_in_one_line(monkeypatch, tmp_path, capsys)
 
 
 def test_each_component_puts_its_part_in_the_world():
-    from psgsl_pgm.sim import Anemometer, LocalisationError, MOXSensor
+    from psgsl_pgm.sim import Anemometer, LocalisationError, MOXSensor, SourceDetector
 
     house = default_world().house(0)
+    assert WorldModel.parse("ideal+mox+pose").source_detector().miss_probability == 0.0  # camera's part
     kwargs = WorldModel.parse("ideal+mox+camera+pose").world_kwargs(house)
-    assert set(kwargs) == {"gas_sensor", "anemometer", "camera", "detector", "localisation"}
+    assert set(kwargs) == {"gas_sensor", "anemometer", "camera", "detector", "localisation", "source_detector"}
+    assert kwargs["source_detector"].miss_probability == SourceDetector.realistic().miss_probability > 0
     assert isinstance(kwargs["gas_sensor"], MOXSensor) and kwargs["anemometer"] == Anemometer.datasheet()
     assert kwargs["camera"].occlusion == "furniture" and kwargs["detector"].correlated
     assert isinstance(kwargs["localisation"], LocalisationError)

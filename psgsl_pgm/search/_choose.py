@@ -1,0 +1,33 @@
+"""One entry point for every policy's next stop: the policies of :mod:`._policies` and the methods of the field
+built on them (:mod:`._entrotaxis`, :mod:`._reactive`), which import :mod:`._policies` and so cannot be called
+from it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._entrotaxis import choose_entrotaxis
+from ._policies import (POLICIES, REACTIVE, Decision, Situation, _choose_infotaxis, _choose_space_aware,
+                        _nearest_object_step, _semantic_step, _towards)
+from ._reactive import reactive_step
+
+__all__ = ["choose"]
+
+
+def choose(policy: str, sit: Situation) -> Decision:
+    """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
+    if policy == "greedy":
+        return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell
+    if policy == "semantic-modes":
+        return _semantic_step(sit)
+    if policy == "nearest-object":
+        return _nearest_object_step(sit)
+    if policy == "infotaxis":
+        return _choose_infotaxis(sit)
+    if policy == "space-aware-infotaxis":
+        return _choose_space_aware(sit)
+    if policy == "entrotaxis":
+        return choose_entrotaxis(sit)
+    if policy in REACTIVE:
+        return reactive_step(policy, sit)
+    raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")
