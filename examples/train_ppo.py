@@ -1,4 +1,8 @@
-"""Train a PPO agent on ``psgsl/House-v0`` and compare it with infotaxis on held-out generated homes.
+"""
+A PPO agent on the gymnasium environment
+========================================
+
+Train a PPO agent on ``psgsl/House-v0`` and compare it with infotaxis on held-out generated homes.
 
 The agent (stable-baselines3 PPO, ``MultiInputPolicy`` on the environment's Dict observation, normalised with
 ``VecNormalize``) trains for ``--minutes`` of wall-clock time (at most 30) on development homes 0 … ``--houses``−1;

@@ -314,7 +314,7 @@ def _in_ppm(data, conversion):
 def write_replay(result: ReplayResult, out) -> list:
     """What ``psgsl experiment`` writes for one run, into ``out``: ``run.npz`` (:func:`save_run`), ``metrics.csv``,
     ``summary.json``, ``posterior-<variant>.npy`` (final, (H, W) float64), ``posterior.png`` (the final posteriors
-    with the path and the 90 % region, :func:`replay_figure`) and, with a known source, ``error-chart.png``. Every
+    with the path and the 90 % region, ``replay_figure``) and, with a known source, ``error-chart.png``. Every
     file atomically."""
     from ..io._output import write_file_atomically
     from ._figures import plot_error_chart

@@ -47,7 +47,7 @@ class SearchConfig:
     miss_probability : float or None
         In [0, 1): the robot's probability that a move within ``found_radius`` of the source's found region does
         not detect it (:class:`DetectionModel`). None: the robot's estimate counted on reference passes of its
-        detector (:func:`psgsl_pgm.experiment.robot_source_miss_probability`) with ``end="declare"``, 0 (the
+        detector (``psgsl_pgm.experiment._robot_models.robot_source_miss_probability``) with ``end="declare"``, 0 (the
         deterministic rule) with ``end="reach"``.
     end : {"declare", "reach"}
         How a run ends. ``"declare"``: at the robot's first declaration (:mod:`psgsl_pgm.search._declare`),

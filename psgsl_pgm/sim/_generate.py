@@ -7,7 +7,7 @@ command with ``--world`` run on it.
 
 The generative model (one ``numpy.random.default_rng([seed, 0x40_05E])``):
 
-* rooms: ``n_rooms`` uniform in {3, …, 8} unless given; types :func:`room_type_sequence` unless given;
+* rooms: ``n_rooms`` uniform in {3, …, 8} unless given; types ``room_type_sequence`` unless given;
 * area: uniform in [max(40, 14 n), 200] m² unless given (outline, walls included);
 * plan: :func:`psgsl_pgm.sim._floorplan.draw_plan` (rooms, 0.2-m walls, 0.9-m doors, one inlet and one outlet
   window); furniture: :func:`psgsl_pgm.sim._furnish.furnish` from the generator's p(o | room) table;
@@ -194,7 +194,7 @@ def generate_house(seed: int, *, n_rooms: int | None = None, area: float | None 
         Outline area in m², within :data:`AREA_RANGE` and ≥ :data:`AREA_PER_ROOM` per room (default: drawn).
         The drawn plan's sides are whole cells: its area is within one cell row of ``area``.
     room_types : sequence of str, optional, keyword-only
-        One type of :data:`ROOM_TYPES` per room (default: :func:`room_type_sequence`).
+        One type of ``ROOM_TYPES`` per room (default: ``room_type_sequence``).
     wind_speed : float, optional, keyword-only
         Mean wind speed, m/s (default: drawn).
 

@@ -7,7 +7,7 @@ found region detects it with probability 1 − m and never detects a source that
 The detector only reports; the robot decides where the source is (:mod:`psgsl_pgm.search._declare`).
 
 The simulator holds the true miss probability m; the robot never reads it and estimates it by counting passes
-on reference runs (:func:`psgsl_pgm.experiment.robot_source_miss_probability`).
+on reference runs (``psgsl_pgm.experiment._robot_models.robot_source_miss_probability``).
 """
 
 from __future__ import annotations
