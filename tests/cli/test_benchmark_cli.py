@@ -62,12 +62,12 @@ def test_tiny_benchmark_report_primary_ratio_and_resume(tmp_path, capsys):
     assert "## Primary comparison (declared before the runs)" in report and "psgsl benchmark --houses 2" in report
     for name in ("survival.png", "rmst.png", "episodes.json", "houses/h00000/world.yaml", "houses/h00001/world.yaml"):
         assert (out / name).stat().st_size > 0
-    # the primary ratio by hand from the stored runs: mean capped time of A over that of B, same episodes
+    # the primary ratio by hand from the stored runs: mean capped time to success of A over that of B, same episodes
     from psgsl_pgm.search import load_search_run
 
     def capped(policy_variant, condition="right-ontology"):
         return np.array([min(load_search_run(out / "runs" / f"h{h:05d}__{condition}__{policy_variant}__infotaxis__seed{s}.npz")
-                             .time_to_find, 40.0) for h in (0, 1) for s in (0, 1)])
+                             .time_to_success, 40.0) for h in (0, 1) for s in (0, 1)])
 
     a, b = capped("infotaxis__semantics+rooms"), capped("infotaxis__olfaction")
     prim = summary["primary"]["result"]
