@@ -154,9 +154,9 @@ def _load_array(path, name):
 def _estimate(args) -> int:
     import numpy as np
 
-    from ..core import Ontology, fuse, semantic_source_probability
+    from ..core import Ontology, semantic_source_probability
     from .._shared._validate import as_float_array, check_distribution, check_nonnegative, check_sums
-    from ..io._output import check_output_file, write_file_atomically
+    from ..io._output import check_output_file
 
     out = check_output_file(args.out)  # before reading anything: a directory, a device or no folder is refused
     try:
@@ -165,10 +165,6 @@ def _estimate(args) -> int:
         raise _UsageError(f"--ontology: no such file {args.ontology!r}") from None
     except (ValueError, TypeError) as exc:  # the message starts with the file name
         raise type(exc)(f"--ontology: {exc}") from None
-    if Path(args.class_probs).suffix.lower() in (".npz", ".json"):
-        class_probs = _read_beliefs(args, ontology)
-    else:
-        class_probs = _load_array(args.class_probs, "--class-probs")
     olfactory = _load_array(args.olfactory, "--olfactory")
     if args.gas is None:
         if len(ontology.gases) != 1:
@@ -176,6 +172,12 @@ def _estimate(args) -> int:
         gas = ontology.gases[0]
     else:
         gas = args.gas
+    if Path(args.class_probs).suffix.lower() == ".json":  # a Voxeland map: its columns, in bounded memory
+        return _estimate_voxeland(args, ontology, gas, olfactory, out)
+    if Path(args.class_probs).suffix.lower() == ".npz":
+        class_probs = _read_beliefs(args, ontology)
+    else:
+        class_probs = _load_array(args.class_probs, "--class-probs")
     if class_probs.shape[-1:] != (len(ontology.classes),):
         raise _UsageError(f"--class-probs must have shape (..., {len(ontology.classes)}) for the ontology's classes "
                           f"{list(ontology.classes)}, got {class_probs.shape}")
@@ -189,7 +191,16 @@ def _estimate(args) -> int:
     check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g))", olf.dtype, over="over all cells")
     semantic = semantic_source_probability(class_probs, ontology.source_likelihood(gas), ontology.class_prior,
                                            column_axis=2 if voxels else None)  # voxel columns -> cells
-    posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z)
+    return _write_posterior(olfactory, semantic, gas, out)
+
+
+def _write_posterior(olfactory, semantic, gas, out) -> int:
+    import numpy as np
+
+    from ..core import fuse
+    from ..io._output import write_file_atomically
+
+    posterior = fuse(olfactory, semantic)  # p(s | g, z) ∝ p(s | g) p(s | z), eq. (11)
     write_file_atomically(out, lambda fh: np.save(fh, posterior))  # exactly at --out: no ".npy" appended
     best = np.unravel_index(int(np.argmax(posterior)), posterior.shape)
     print(f"p(s | g, z) for {gas!r} over {posterior.size} cells -> {out}; most probable cell {tuple(map(int, best))} "
@@ -197,20 +208,53 @@ def _estimate(args) -> int:
     return 0
 
 
+def _estimate_voxeland(args, ontology, gas, olfactory, out) -> int:
+    """``estimate`` from a Voxeland instance map: column weights a block of rows at a time (never the voxel array)."""
+    import json
+
+    import numpy as np
+
+    from .._shared._validate import as_float_array, check_nonnegative, check_sums
+    from ..core._voxeland import voxeland_column_weights
+
+    grid = _map_grid(args)
+    if olfactory.shape != grid.shape:
+        raise _UsageError(f"--olfactory must have the map's shape {grid.shape} (--map at {grid.resolution:g} m), "
+                          f"got {olfactory.shape}")
+    olf = check_nonnegative(as_float_array(olfactory, "--olfactory"), "--olfactory (p(s | g) per cell)")
+    check_sums(np.sum(olf, dtype=np.float64), "--olfactory (p(s | g))", olf.dtype, over="over all cells")
+    try:
+        data = json.loads(Path(args.class_probs).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise _UsageError(f"--class-probs: no such file {args.class_probs!r}") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{args.class_probs}: not a readable JSON file ({exc})") from None
+    weights = voxeland_column_weights(data, ontology.classes, grid=grid, class_prior=ontology.class_prior,
+                                      source_likelihood=ontology.source_likelihood(gas), where=args.class_probs,
+                                      other_classes="lump" if args.other_classes else "error")
+    total = np.sum(weights, dtype=np.float64)
+    if not total > 0:
+        raise ValueError(f"{args.class_probs}: no cell can hold a {gas!r} source (zero weight everywhere)")
+    return _write_posterior(olfactory, weights / total, gas, out)  # p(s_c | z), eq. (20) summed over columns
+
+
+def _map_grid(args):
+    """The working grid: ``--map`` coarsened to ``--resolution`` (the map's own by default)."""
+    from ..sim import load_ros_map
+    from ..sim._resample import coarsen_factor, coarsen_occupancy
+
+    if args.map is None:
+        raise _UsageError("--class-probs: a Voxeland instance map (.json) needs --map (the ROS map it is read onto)")
+    fine = load_ros_map(args.map)
+    res = fine.resolution if args.resolution is None else args.resolution
+    return coarsen_occupancy(fine, coarsen_factor(fine.resolution, res, where="--resolution"))
+
+
 def _read_beliefs(args, ontology):
-    """Class beliefs from an .npz (probs + classes) or a Voxeland instance map (.json, needs --map)."""
+    """Class beliefs from an .npz (probs + classes)."""
     from ..io._class_maps import read_class_beliefs
 
-    grid = None
-    if args.map is not None:
-        from ..sim import load_ros_map
-        from ..sim._resample import coarsen_factor, coarsen_occupancy
-
-        fine = load_ros_map(args.map)
-        res = fine.resolution if args.resolution is None else args.resolution
-        grid = coarsen_occupancy(fine, coarsen_factor(fine.resolution, res, where="--resolution"))
-    elif Path(args.class_probs).suffix.lower() == ".json":
-        raise _UsageError("--class-probs: a Voxeland instance map (.json) needs --map (the ROS map it is read onto)")
+    grid = None if args.map is None else _map_grid(args)
     return read_class_beliefs(args.class_probs, ontology.classes, grid=grid, class_prior=ontology.class_prior,
                               other_classes="lump" if args.other_classes else "error")
 

@@ -37,7 +37,7 @@ from .._shared._validate import check_distribution
 from ._coco import canonical_class
 from ._npyfile import READ_ERRORS, load_npy
 
-__all__ = ["read_class_beliefs", "voxeland_class_beliefs"]
+__all__ = ["MAX_VOXEL_BYTES", "read_class_beliefs", "VoxelMap", "voxeland_class_beliefs"]
 
 OTHER = "other"
 #: A detector's "no object" class: always part of ``other``.
@@ -185,8 +185,12 @@ def unknown_names(unknown, known, what: str, clause: str, *, listed: str | None 
     return f"{what}{plural} {clause}: " + "; ".join(parts) + f" (known: {listed or ', '.join(known)})"
 
 
+#: Largest dense voxel array :func:`voxeland_class_beliefs` builds (bytes of the (H, W, L, k) float64 result).
+MAX_VOXEL_BYTES = 1 << 30
+
+
 def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Voxeland map",
-                           other_classes: str = "error") -> np.ndarray:
+                           other_classes: str = "error", max_bytes: int = MAX_VOXEL_BYTES) -> np.ndarray:
     """Voxel class beliefs (H, W, L, k) from a parsed Voxeland instance map (see the module docstring).
 
     Parameters
@@ -201,73 +205,136 @@ def voxeland_class_beliefs(data, classes, *, grid, class_prior, where: str = "Vo
         Name for messages.
     other_classes : {"error", "lump"}, keyword-only
         A class the ontology lacks: refused, naming the closest known names (default), or added to ``other``.
+    max_bytes : int, keyword-only
+        Largest result allowed (default :data:`MAX_VOXEL_BYTES`, 1 GiB). A finer grid is refused before anything
+        is allocated: at 1 cm a house's voxel map runs to tens of GB. :func:`psgsl_pgm.core._voxeland.voxeland_column_weights`
+        gives the semantic term of any grid in bounded memory.
 
     Returns
     -------
     (H, W, L, k) ndarray of float64
         Dirichlet means inside boxes, the prior elsewhere. Cost: O(H · W · L · k) memory, one slice update per
         instance.
+
+    Raises
+    ------
+    ValueError
+        A malformed map (naming ``where`` and the key), or a voxel array above ``max_bytes`` (naming the
+        resolution that would fit).
     """
-    other_classes = check_other_classes(other_classes)
-    prior = np.asarray(class_prior, dtype=np.float64)
-    if prior.shape != (len(classes),):
-        raise ValueError(f"class_prior must have shape ({len(classes)},), got {prior.shape}")
-    if not isinstance(data, dict):
-        raise ValueError(f"{where}: expected a JSON object with key 'instances', got {type(data).__name__}")
-    if "instances" not in data:
-        raise ValueError(f"{where}: missing key 'instances'")
-    inst = data["instances"]
-    if not isinstance(inst, dict):
-        raise ValueError(f"{where}: key 'instances' must map instance ids to instances, got {type(inst).__name__}")
-    boxes = []
-    for iid, it in inst.items():
-        key = f"instances.{iid}"
-        if not isinstance(it, dict):
-            raise ValueError(f"{where}: key '{key}' must be an object, got {it!r}")
-        for req in ("bbox", "results", "n_observations"):
-            if req not in it:
-                raise ValueError(f"{where}: key '{key}' lacks '{req}'")
-        bbox = it["bbox"]
-        if not isinstance(bbox, dict) or "center" not in bbox or "size" not in bbox:
-            raise ValueError(f"{where}: key '{key}.bbox' must have 'center' and 'size', got {bbox!r}")
-        centre = _vec3(where, f"{key}.bbox.center", bbox["center"])
-        size = _vec3(where, f"{key}.bbox.size", bbox["size"])
-        if min(size) <= 0:
-            raise ValueError(f"{where}: key '{key}.bbox.size' must be positive, got {bbox['size']!r}")
-        nobs = it["n_observations"]
-        if isinstance(nobs, bool) or not isinstance(nobs, int) or nobs < 0:
-            raise ValueError(f"{where}: key '{key}.n_observations' must be a whole number >= 0, got {nobs!r}")
-        res = it["results"]
-        if not isinstance(res, dict):
-            raise ValueError(f"{where}: key '{key}.results' must map classes to Dirichlet alphas, got {res!r}")
-        names = list(res)
-        alphas = np.zeros(len(classes))
-        for j, name in zip(_class_index(f"{where}: key '{key}.results'", names, classes, other_classes), names):
-            a = res[name]
-            if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a) or a < 0:
-                raise ValueError(f"{where}: key '{key}.results.{name}' must be a finite alpha >= 0, got {a!r}")
-            alphas[j] += float(a)
-        if nobs == 0 or alphas.sum() == 0:
-            continue  # no evidence
-        boxes.append((np.array(centre), np.array(size), alphas))
-    h, w = grid.shape
-    step = float(grid.resolution)
-    if boxes:
-        z0 = min(c[2] - s[2] / 2 for c, s, _ in boxes)
-        z1 = max(c[2] + s[2] / 2 for c, s, _ in boxes)
-    else:
-        z0, z1 = 0.0, step
-    layers = max(1, int(math.ceil((z1 - z0) / step - 1e-9)))
-    alpha = np.zeros((h, w, layers, len(classes)))
-    ox, oy = grid.origin
-    for centre, size, a in boxes:  # one slice per instance: voxels whose centre lies in the box
+    vox = VoxelMap.parse(data, classes, grid=grid, class_prior=class_prior, where=where,
+                         other_classes=other_classes)
+    need = vox.nbytes()
+    if need > max_bytes:
+        raise ValueError(
+            f"{where}: read onto {grid.shape[0]} x {grid.shape[1]} cells of {grid.resolution:g} m with "
+            f"{vox.layers} layers, the voxel map needs {need / 2**30:.1f} GiB (limit {max_bytes / 2**30:.1f} GiB); "
+            f"use a coarser resolution (>= {vox.resolution_within(max_bytes):.3g} m)")
+    return vox.rows(0, grid.shape[0])
+
+
+class VoxelMap:
+    """A parsed Voxeland map on a grid: instance boxes and their α, the layers, and voxel rows on demand."""
+
+    def __init__(self, boxes, prior, grid, z0, layers):
+        self.boxes, self.prior, self.grid, self.z0, self.layers = boxes, prior, grid, z0, layers
+
+    @classmethod
+    def parse(cls, data, classes, *, grid, class_prior, where: str, other_classes: str) -> "VoxelMap":
+        other_classes = check_other_classes(other_classes)
+        prior = np.asarray(class_prior, dtype=np.float64)
+        if prior.shape != (len(classes),):
+            raise ValueError(f"class_prior must have shape ({len(classes)},), got {prior.shape}")
+        if not isinstance(data, dict):
+            raise ValueError(f"{where}: expected a JSON object with key 'instances', got {type(data).__name__}")
+        if "instances" not in data:
+            raise ValueError(f"{where}: missing key 'instances'")
+        inst = data["instances"]
+        if not isinstance(inst, dict):
+            raise ValueError(f"{where}: key 'instances' must map instance ids to instances, got {type(inst).__name__}")
+        boxes = [box for iid, it in inst.items()
+                 if (box := _instance_box(where, f"instances.{iid}", it, classes, other_classes)) is not None]
+        step = float(grid.resolution)
+        if boxes:
+            z0 = min(c[2] - s[2] / 2 for c, s, _ in boxes)
+            z1 = max(c[2] + s[2] / 2 for c, s, _ in boxes)
+        else:
+            z0, z1 = 0.0, step
+        layers = max(1, int(math.ceil((z1 - z0) / step - 1e-9)))
+        return cls(boxes, prior, grid, z0, layers)
+
+    def nbytes(self) -> int:
+        """Bytes of the dense (H, W, L, k) float64 voxel map."""
+        h, w = self.grid.shape
+        return h * w * self.layers * len(self.prior) * 8
+
+    def resolution_within(self, max_bytes: int) -> float:
+        """The resolution at which the dense voxel map would fit ``max_bytes`` (cells and layers scale as 1/r³)."""
+        return float(self.grid.resolution) * (self.nbytes() / max_bytes) ** (1 / 3)
+
+    def _spans(self, centre, size):
+        h, w = self.grid.shape
+        step = float(self.grid.resolution)
+        ox, oy = self.grid.origin
         lo, hi = centre - size / 2, centre + size / 2
-        c0, c1 = _span(lo[0], hi[0], ox, step, w)
-        r0, r1 = _span(lo[1], hi[1], oy, step, h)
-        l0, l1 = _span(lo[2], hi[2], z0, step, layers)
-        alpha[r0:r1, c0:c1, l0:l1] += a
-    total = alpha.sum(axis=-1, keepdims=True)
-    return np.where(total > 0, alpha / np.where(total > 0, total, 1.0), prior)  # Dirichlet mean, else p(o)
+        return (_span(lo[1], hi[1], oy, step, h), _span(lo[0], hi[0], ox, step, w),
+                _span(lo[2], hi[2], self.z0, step, self.layers))
+
+    def reach(self) -> tuple[int, int, int, int]:
+        """Rows [r0, r1) and columns [c0, c1) of the grid that some box reaches (empty when none does)."""
+        h, w = self.grid.shape
+        r0, r1, c0, c1 = h, 0, w, 0
+        for centre, size, _ in self.boxes:
+            (a, b), (c, d), _ = self._spans(centre, size)
+            if b > a and d > c:
+                r0, r1, c0, c1 = min(r0, a), max(r1, b), min(c0, c), max(c1, d)
+        return r0, r1, c0, c1
+
+    def rows(self, r0: int, r1: int, c0: int = 0, c1: int | None = None) -> np.ndarray:
+        """Voxel beliefs of grid rows [r0, r1) and columns [c0, c1): (r1 - r0, c1 - c0, L, k) float64."""
+        c1 = self.grid.shape[1] if c1 is None else c1
+        alpha = np.zeros((r1 - r0, c1 - c0, self.layers, len(self.prior)))
+        for centre, size, a in self.boxes:  # one slice per instance: voxels whose centre lies in the box
+            (ra, rb), (ca, cb), (la, lb) = self._spans(centre, size)
+            ra, rb, ca, cb = max(ra, r0), min(rb, r1), max(ca, c0), min(cb, c1)
+            if rb > ra and cb > ca:
+                alpha[ra - r0:rb - r0, ca - c0:cb - c0, la:lb] += a
+        total = alpha.sum(axis=-1, keepdims=True)
+        np.divide(alpha, total, out=alpha, where=total > 0)  # Dirichlet mean, in place
+        alpha[total[..., 0] == 0] = self.prior  # no evidence: p(o)
+        return alpha
+
+
+def _instance_box(where, key, it, classes, other_classes):
+    """(centre, size, α) of one instance, or None when it carries no evidence."""
+    if not isinstance(it, dict):
+        raise ValueError(f"{where}: key '{key}' must be an object, got {it!r}")
+    for req in ("bbox", "results", "n_observations"):
+        if req not in it:
+            raise ValueError(f"{where}: key '{key}' lacks '{req}'")
+    bbox = it["bbox"]
+    if not isinstance(bbox, dict) or "center" not in bbox or "size" not in bbox:
+        raise ValueError(f"{where}: key '{key}.bbox' must have 'center' and 'size', got {bbox!r}")
+    centre = _vec3(where, f"{key}.bbox.center", bbox["center"])
+    size = _vec3(where, f"{key}.bbox.size", bbox["size"])
+    if min(size) <= 0:
+        raise ValueError(f"{where}: key '{key}.bbox.size' must be positive, got {bbox['size']!r}")
+    nobs = it["n_observations"]
+    if isinstance(nobs, bool) or not isinstance(nobs, int) or nobs < 0:
+        raise ValueError(f"{where}: key '{key}.n_observations' must be a whole number >= 0, got {nobs!r}")
+    res = it["results"]
+    if not isinstance(res, dict):
+        raise ValueError(f"{where}: key '{key}.results' must map classes to Dirichlet alphas, got {res!r}")
+    names = list(res)
+    alphas = np.zeros(len(classes))
+    for j, name in zip(_class_index(f"{where}: key '{key}.results'", names, classes, other_classes), names):
+        a = res[name]
+        if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a) or a < 0:
+            raise ValueError(f"{where}: key '{key}.results.{name}' must be a finite alpha >= 0, got {a!r}")
+        alphas[j] += float(a)
+    if nobs == 0 or alphas.sum() == 0:
+        return None  # no evidence
+    return np.array(centre), np.array(size), alphas
 
 
 def _span(lo: float, hi: float, origin: float, step: float, n: int) -> tuple[int, int]:
