@@ -181,7 +181,11 @@ def _figures(out: Path, stats: dict, conditions) -> list:
     files = []
     arms = sorted(dict.fromkeys(a for c in conditions for a in stats[c]), key=_arm_order)
     colour = {a: f"C{i % 10}" for i, a in enumerate(arms)}  # one colour per arm in every panel
-    fig, axes = plt.subplots(1, len(conditions), figsize=(5 * len(conditions), 4.6), squeeze=False, sharey=True,
+    entry = 0.6 + 0.075 * max(len(a) for a in arms)  # legend entry width (in) at 9 pt: line, gap, label
+    width = max(5 * len(conditions), min(12.5, 2 * entry))  # at most 12.5 in: legible in the docs' column
+    ncols = max(1, min(len(arms), int(width // entry)))  # the legend wraps instead of running off the figure
+    rows = -(-len(arms) // ncols)
+    fig, axes = plt.subplots(1, len(conditions), figsize=(width, 4.2 + 0.22 * rows), squeeze=False, sharey=True,
                              layout="constrained")
     for ax, c in zip(axes[0], conditions):
         for arm, s in stats[c].items():
@@ -191,7 +195,7 @@ def _figures(out: Path, stats: dict, conditions) -> list:
         ax.set_ylim(0, 1.02)
     axes[0][0].set_ylabel("P(no success by t)")
     handles = [plt.Line2D([], [], color=colour[a]) for a in arms]  # below the panels: no curve hidden
-    fig.legend(handles, arms, loc="outside lower center", ncols=min(len(arms), 4), fontsize=8, frameon=False)
+    fig.legend(handles, arms, loc="outside lower center", ncols=ncols, fontsize=9, frameon=False)
     fig.savefig(out / "survival.png", dpi=110)
     plt.close(fig)
     files.append("survival.png")
