@@ -14,7 +14,8 @@ import re
 from pathlib import Path
 
 PUBLIC_PACKAGES = ("psgsl_pgm", "psgsl_pgm.networks", "psgsl_pgm.olfaction", "psgsl_pgm.sim",
-                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching")
+                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching",
+                   "psgsl_pgm.gym")
 GAPS_FILE = Path(__file__).with_name("docstring_gaps.txt")
 SECTION = re.compile(r"^(\s*)Parameters\n\1-{4,}\n(.*?)(?=^\1\S[^\n]*\n\1-{4,}\n|\Z)", re.M | re.S)
 
