@@ -16,7 +16,6 @@ Private to the notebooks (not part of the estimator's API); every function here 
 * :func:`closed_loop_results` — the stored closed-loop grid (summaries and paired comparisons) notebook 08 reads.
 """
 
-from psgsl_pgm.networks import draw_network
 from psgsl_pgm.sim import figure_problems, map_norm, plot_cell_map
 
 from ._approximation import approximation_error
@@ -33,3 +32,13 @@ __all__ = [
     "plot_cell_map",
     "survey",
 ]
+
+
+def __getattr__(name):
+    """``draw_network`` is :mod:`psgsl_pgm.networks`' (pgmpy, the networks extra), imported when first asked for,
+    so that a notebook that only reads or plots results does not load pgmpy."""
+    if name == "draw_network":
+        from psgsl_pgm.networks import draw_network
+
+        return draw_network
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
