@@ -115,7 +115,7 @@ sphinx_gallery_conf = {
 #: The public packages, in the order the reference lists them (docs/architecture.md: every public name is
 #: imported from one of these). Their pages are written from ``__all__`` at every build, so no name is missed.
 PUBLIC_PACKAGES = ("psgsl_pgm", "psgsl_pgm.networks", "psgsl_pgm.olfaction", "psgsl_pgm.sim",
-                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching")
+                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching", "psgsl_pgm.gym")
 API = DOCS / "reference" / "api"
 
 

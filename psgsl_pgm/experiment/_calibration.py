@@ -103,10 +103,39 @@ class Calibration:
 
 
 def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None) -> list:
-    """The :class:`psgsl_pgm.olfaction.CalibrationRun` of each (seed, source): the tour's readings, and a plume
-    model carrying the mean wind estimated from that run's own anemometer readings. The runs are made in the
-    embedded house of ``config.world_model`` (the ideal world by default), the hits decided as the robot decides
-    them there (:func:`psgsl_pgm.experiment._run.walk`)."""
+    """The :class:`psgsl_pgm.olfaction.CalibrationRun` of each (seed, source) calibration run.
+
+    Each run holds the tour's readings and a plume model carrying the mean wind estimated from that run's own
+    anemometer readings. The runs are made in the embedded house of ``config.world_model`` (the ideal world by
+    default), the hits decided as the robot decides them there (:func:`psgsl_pgm.experiment._run.walk`). A run
+    walks the whole exploration tour without the camera: a few seconds each.
+
+    Parameters
+    ----------
+    runs : sequence of (int, str or (float, float)), default CALIBRATION_RUNS
+        (seed, source) pairs: the house's seed and a source (an object class, or ``"x,y"`` in metres; see
+        :func:`parse_source`). The default, :data:`CALIBRATION_RUNS`, are seeds and sources the evaluation never
+        uses.
+    config : ExperimentConfig, optional, keyword-only
+        The robot's settings (warm-up, world model, sensors); the defaults when None.
+
+    Returns
+    -------
+    runs : list of psgsl_pgm.olfaction.CalibrationRun
+        One per (seed, source), in the order given.
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty, or a source names no object of the house or lies off its map.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.experiment import calibration_runs
+    >>> data = calibration_runs([(1000, "toilet")])            # doctest: +SKIP
+    >>> len(data), data[0].positions.shape[1]                  # doctest: +SKIP
+    (1, 2)
+    """
     config = ExperimentConfig() if config is None else config
     runs = list(runs)
     if not runs:
@@ -237,10 +266,32 @@ def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig
     (:func:`~psgsl_pgm.olfaction.profile_log_likelihood`). :func:`calibrate` fits (D, τ, κ) jointly; this is its
     profile in κ at fixed (D, τ).
 
+    Parameters
+    ----------
+    runs : sequence of (int, str or (float, float)), default CALIBRATION_RUNS
+        (seed, source) calibration runs, as :func:`calibration_runs` takes them.
+    config : ExperimentConfig, optional, keyword-only
+        Supplies D (``diffusivity``), τ (``lifetime``) and ε (``false_hit_rate``); the defaults when None.
+
     Returns
     -------
     kappa : float
         m²/s.
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or names a source the house lacks, or the pooled readings hold no hit (or no miss) where
+        the plume predicts gas, so that κ̂ would be 0 (or infinite).
+
+    Examples
+    --------
+    The default calibration runs take about a minute on one core:
+
+    >>> from psgsl_pgm.experiment import calibrate_encounter_scale
+    >>> kappa = calibrate_encounter_scale()                    # doctest: +SKIP
+    >>> kappa > 0                                              # doctest: +SKIP
+    True
     """
     config = ExperimentConfig() if config is None else config
     data = calibration_runs(runs, config=config)
@@ -325,11 +376,45 @@ def coverage_threshold(log_prior, log_likelihoods, true_cell: int, *, level: flo
     not proved monotone; the bisection then finds one crossing, and :func:`coverage_tempering` reports the
     coverage actually reached.
 
+    Parameters
+    ----------
+    log_prior : (N,) array_like of float
+        log p(s) over the N candidate cells (−inf off the support).
+    log_likelihoods : (N,) or (J, N) array_like of float
+        The accumulated log-likelihood L(s) of the readings, one row per component θ_j of a parameter grid.
+    true_cell : int
+        The flat index of the known source's cell.
+    level : float, default 0.9, keyword-only
+        The credible level of the region, in (0, 1).
+    weights : (J,) array_like of float, optional, keyword-only
+        The components' prior weights π_j (a mixture posterior ∝ p(s) Σ_j π_j exp(β L_j(s))); one component when
+        None.
+    bounds : (float, float), default (1e-4, 10.0), keyword-only
+        The interval of β searched, both > 0.
+    iterations : int, default 60, keyword-only
+        Bisection steps on log β (60 halve the log-interval to far below float64's resolution).
+
     Returns
     -------
     float
         β* in [bounds[0], bounds[1]]: ``bounds[0]`` when t is outside the region already there, ``bounds[1]``
         when it is still inside there.
+
+    Raises
+    ------
+    ValueError
+        ``level`` outside (0, 1), or the arrays do not make a posterior (shapes that disagree, no finite
+        log-prior, weights that do not match the rows).
+
+    Examples
+    --------
+    Three cells, a flat prior, the readings favouring cell 0 while the source is in cell 1: the 90 % region holds
+    cell 1 for β up to about 1.15 (untempered, β = 1, it still does; at β = 2 cell 0 alone holds 90 %).
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import coverage_threshold
+    >>> round(coverage_threshold(np.zeros(3), np.array([0.0, -2.0, -4.0]), 1), 3)
+    1.147
     """
     from ._metrics import credible_region
 
@@ -425,20 +510,57 @@ CHECKPOINTS = (0.25, 0.5, 0.75, 1.0)
 
 def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: float = 0.01, level: float = 0.9,
                         parameter_grid=None) -> np.ndarray:
-    """(len(data), 4) thresholds β*_ri (:func:`coverage_threshold`) of each calibration run's posterior at ¼, ½, ¾
-    and the end of its readings (``CHECKPOINTS`` of this module).
+    """The thresholds β*_ri (:func:`coverage_threshold`) of each calibration run's posterior at ¼, ½, ¾ and the end.
 
-    The estimator is replayed untempered on each run's readings (its plume with the fitted (D, τ, κ) and the
-    run's estimated wind, a uniform prior over the free cells, as :func:`pmfs_tempering`): for ``"infotaxis"``
-    :class:`psgsl_pgm.olfaction.GridInfotaxis` with β = 1, whose accumulated log-likelihood is then
-    L_j(s) = Σ_k log P_θj(g_k | s) per component (``parameter_grid``: rows (D, τ, κ, weight); None: the fit), for
-    ``"analytic-plume"`` :class:`psgsl_pgm.olfaction.PMFSEstimator`'s untempered score S(s).
+    The checkpoints are ``CHECKPOINTS`` of this module. The estimator is replayed untempered on each run's readings
+    (its plume with the fitted (D, τ, κ) and the run's estimated wind, a uniform prior over the free cells, as
+    :func:`pmfs_tempering`): for ``"infotaxis"`` :class:`psgsl_pgm.olfaction.GridInfotaxis` with β = 1, whose
+    accumulated log-likelihood is then L_j(s) = Σ_k log P_θj(g_k | s) per component (``parameter_grid``: rows
+    (D, τ, κ, weight); None: the fit), for ``"analytic-plume"`` :class:`psgsl_pgm.olfaction.PMFSEstimator`'s
+    untempered score S(s).
 
     The wind is the run's estimate from *all* of its readings (hindsight) and the prior covers every free cell;
     the experiment's estimator starts from a few anemometer readings and the source region's prior, so its early
     posteriors are wronger and its thresholds at ¼ and ½ lower (on run (1000, toilet): 0.15 and 0.16 against
     ≥ 10 here). ``benchmarks/calibration_record.py`` records the experiment's own per-step code for
     ``benchmarks/calibration_coverage.py``, which chooses the tempering from those records.
+
+    Parameters
+    ----------
+    data : sequence of psgsl_pgm.olfaction.CalibrationRun
+        The calibration runs (:func:`calibration_runs`).
+    fit : psgsl_pgm.olfaction.PlumeFit
+        The fitted plume parameters (D, τ, κ, δ).
+    estimator : {"infotaxis", "analytic-plume"}
+        Whose posterior is replayed.
+    false_hit_rate : float, default 0.01, keyword-only
+        ε in [0, 1) of the Infotaxis hit model.
+    level : float, default 0.9, keyword-only
+        The credible level, in (0, 1).
+    parameter_grid : (J, 4) array_like of float, optional, keyword-only
+        Rows (D, τ, κ, weight) of the Infotaxis mixture; the single fit when None (ignored for
+        ``"analytic-plume"``).
+
+    Returns
+    -------
+    thresholds : (len(data), 4) ndarray of float64
+        β*, one row per run, one column per checkpoint.
+
+    Raises
+    ------
+    ValueError
+        ``estimator`` is neither ``"infotaxis"`` nor ``"analytic-plume"``, or ``fit``, ``false_hit_rate``,
+        ``level`` or ``parameter_grid`` is out of range (the estimators check them).
+
+    Examples
+    --------
+    On the default calibration runs (about a minute each for the runs, seconds for the replay):
+
+    >>> from psgsl_pgm.experiment import calibration_runs, coverage_thresholds
+    >>> from psgsl_pgm.olfaction import PlumeFit
+    >>> data = calibration_runs([(1000, "toilet")])                          # doctest: +SKIP
+    >>> coverage_thresholds(data, PlumeFit(0.0131, 284.0, 0.821, 0.0), "infotaxis").shape  # doctest: +SKIP
+    (1, 4)
     """
     from ..olfaction import GridInfotaxis
 

@@ -184,12 +184,42 @@ def stored_runs(out) -> dict:
 
 
 def write_outputs(out, *, flat: bool = False, world=None) -> dict:
-    """Aggregate every run stored in ``out/runs`` (:func:`~psgsl_pgm.experiment._driver.stored_runs`) into
-    summaries, CSV and figures.
+    """Aggregate every run stored in ``out/runs`` into summaries, CSV and figures.
 
-    With ``flat=True`` (the demo: one source, one estimator) everything goes straight into ``out``; otherwise
-    into ``out/<source>-<estimator>/``, plus ``out/summary.json`` and ``out/metrics.csv`` over all groups.
-    ``world`` is the runs' world file (default: the embedded house), whose house the figures draw.
+    The runs are those :func:`~psgsl_pgm.experiment._driver.stored_runs` finds. With ``flat=True`` (the demo: one
+    source, one estimator) everything goes straight into ``out``; otherwise into ``out/<source>-<estimator>/``,
+    plus ``out/summary.json`` and ``out/metrics.csv`` over all groups. Each group gets ``summary.json``,
+    ``summary.txt`` (:func:`format_table`), ``metrics.csv``, ``error-chart.png`` and, when its first run kept
+    snapshots, ``progression.png`` and ``room-types.png``.
+
+    Parameters
+    ----------
+    out : str or path-like
+        The experiment's output folder, holding ``runs/``.
+    flat : bool, default False, keyword-only
+        Write one group straight into ``out``.
+    world : str or path-like, optional, keyword-only
+        The runs' world file, whose house the figures draw; the embedded house when None.
+
+    Returns
+    -------
+    dict
+        ``{"<source>/<estimator>": summary}``, each as :func:`summarize` returns it plus ``source`` and
+        ``estimator``.
+
+    Raises
+    ------
+    ValueError
+        No runs are stored in ``out/runs``, or ``flat=True`` with runs of more than one source and estimator.
+
+    Examples
+    --------
+    After :func:`run_experiment` (or ``psgsl experiment --out DIR``) has stored its runs:
+
+    >>> from psgsl_pgm.experiment import write_outputs
+    >>> summaries = write_outputs("experiment-out")             # doctest: +SKIP
+    >>> sorted(summaries)                                       # doctest: +SKIP
+    ['oven/infotaxis']
     """
     import matplotlib.pyplot as plt
 
@@ -237,7 +267,41 @@ def write_outputs(out, *, flat: bool = False, world=None) -> dict:
 def run_demo(out, *, seeds=DEMO_SEEDS, workers: int = 2, estimator: str = "infotaxis", progress: bool = True) -> dict:
     """``psgsl demo``: the embedded house, smoke from the kitchen oven, a few seeds; outputs flat in ``out``.
 
-    Returns the summary (see :func:`summarize`) that is also written to ``out/summary.json``.
+    The runs are stored under ``out/runs`` (resumable: a run already stored is not repeated), and
+    :func:`write_outputs` writes the summary, the CSV and the figures straight into ``out``.
+
+    Parameters
+    ----------
+    out : str or path-like
+        The output folder (made if missing).
+    seeds : sequence of int, default (0, 1, 2, 3), keyword-only
+        The houses' seeds, one run each.
+    workers : int, default 2, keyword-only
+        Processes that run the searches (>= 1).
+    estimator : str, default "infotaxis", keyword-only
+        The olfactory estimator, a name of :data:`ESTIMATORS`.
+    progress : bool, default True, keyword-only
+        Show a progress bar on stderr.
+
+    Returns
+    -------
+    dict
+        The summary (see :func:`summarize`) that is also written to ``out/summary.json``.
+
+    Raises
+    ------
+    ValueError
+        ``estimator`` is not one of :data:`ESTIMATORS`, ``seeds`` is empty, or ``workers`` is not a positive
+        integer.
+
+    Examples
+    --------
+    About a minute per seed:
+
+    >>> from psgsl_pgm.experiment import run_demo
+    >>> summary = run_demo("psgsl-demo", seeds=(0,), workers=1, progress=False)  # doctest: +SKIP
+    >>> summary["n_runs"]                                                        # doctest: +SKIP
+    1
     """
     seeds = [int(s) for s in seeds]
     out = Path(out)

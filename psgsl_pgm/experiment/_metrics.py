@@ -231,6 +231,28 @@ def mean_ci(values, *, level: float = 0.95, lower: float | None = None) -> dict:
     it, so does the intersection — and a reader is never shown an impossible negative error. (With three
     runs the t-interval of a mean error of 2 m with s = 1.7 m reaches below zero; the cut only says "≥ 0".)
 
+    Parameters
+    ----------
+    values : (n, ...) array_like of float
+        One value (or array of values) per run on axis 0; finite.
+    level : float, default 0.95, keyword-only
+        The confidence level, in (0, 1) (the key stays ``"ci95"``).
+    lower : float, optional, keyword-only
+        A bound the quantity cannot cross; the interval is cut there. None: no cut.
+
+    Returns
+    -------
+    dict
+        ``{"mean": m, "ci95": [lo, hi]}``; floats for 1-D ``values``, lists of the trailing shape otherwise.
+
+    Raises
+    ------
+    TypeError
+        ``level`` or ``lower`` is not a real number.
+    ValueError
+        ``values`` holds no run or a value that is not finite, ``level`` is outside (0, 1), or the interval
+        exceeds the float64 range.
+
     Examples
     --------
     >>> r = mean_ci([1.0, 2.0, 3.0])                  # t(0.975, 2) = 4.303, s.e. = 1/√3

@@ -312,10 +312,38 @@ def _in_ppm(data, conversion):
 
 
 def write_replay(result: ReplayResult, out) -> list:
-    """What ``psgsl experiment`` writes for one run, into ``out``: ``run.npz`` (:func:`save_run`), ``metrics.csv``,
-    ``summary.json``, ``posterior-<variant>.npy`` (final, (H, W) float64), ``posterior.png`` (the final posteriors
-    with the path and the 90 % region, ``replay_figure``) and, with a known source, ``error-chart.png``. Every
-    file atomically."""
+    """What ``psgsl experiment`` writes for one replayed run, into ``out``.
+
+    The files: ``run.npz`` (:func:`save_run`), ``metrics.csv``, ``summary.json``, ``posterior-<variant>.npy``
+    (final, (H, W) float64), ``posterior.png`` (the final posteriors with the path and the 90 % region,
+    ``replay_figure``) and, with a known source, ``error-chart.png``. Every file atomically.
+
+    Parameters
+    ----------
+    result : ReplayResult
+        What :func:`replay` returns for a robot's bag.
+    out : str or path-like
+        The output folder (made if missing).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    Raises
+    ------
+    OSError
+        ``out`` cannot be made or written.
+
+    Examples
+    --------
+    With a bag recorded on the robot (``psgsl replay BAG --out DIR`` does the same):
+
+    >>> from psgsl_pgm.experiment import replay, write_replay
+    >>> files = write_replay(replay("robot.bag", world="house.yaml"), "replay-out")   # doctest: +SKIP
+    >>> [f.name for f in files][:2]                                                    # doctest: +SKIP
+    ['run.npz', 'metrics.csv']
+    """
     from ..io._output import write_file_atomically
     from ._figures import plot_error_chart
     from ._store import save_run

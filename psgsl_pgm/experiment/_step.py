@@ -130,9 +130,50 @@ def visit(world, stop, headings, config: ExperimentConfig, *, drive: float = 0.0
     reading at ``stop``; then one frame per heading, with ``config.turn_time`` after each when there are
     several (a look-around). ``camera=False`` skips the frames (calibration runs).
 
-    ``hits`` is the run's :class:`psgsl_pgm.olfaction.HitRule` (:func:`robot_hit_rule`): the returned reading's
-    ``hit`` is then its decision on the reading's samples. Without one the sensor's own hit is returned (a
-    sensor that leaves hits to the robot is then a ValueError).
+    Parameters
+    ----------
+    world : psgsl_pgm.sim.World
+        The simulated world; it is advanced in place.
+    stop : (float, float)
+        Where the robot stands, (x, y) in metres.
+    headings : sequence of float
+        Camera headings for the stop's frames, radians (one frame each).
+    config : ExperimentConfig
+        The robot's speed (m/s) and turn time (s).
+    drive : float, default 0.0, keyword-only
+        Metres driven to reach the stop (time passes at ``config.speed``).
+    turn : float, default 0.0, keyword-only
+        Seconds spent turning before the first frame.
+    camera : bool, default True, keyword-only
+        Take the frames; False skips them.
+    hits : psgsl_pgm.olfaction.HitRule, optional, keyword-only
+        The run's hit rule (``robot_hit_rule``): the returned reading's ``hit`` is then its decision on the
+        reading's samples. Without one the sensor's own hit is returned.
+
+    Returns
+    -------
+    reading : psgsl_pgm.sim.GasReading
+        The gas reading, its ``hit`` decided.
+    wind : (2,) ndarray of float64
+        The anemometer's (u_x, u_y), m/s.
+    frames : list of psgsl_pgm.sim.Frame
+        One per heading (empty with ``camera=False``).
+
+    Raises
+    ------
+    ValueError
+        The sensor leaves the hit decision to the robot and no ``hits`` rule is given, or ``stop`` lies off the
+        map.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import ExperimentConfig, visit
+    >>> from psgsl_pgm.sim import make_world
+    >>> world = make_world(seed=0)
+    >>> reading, wind, frames = visit(world, (7.0, 2.0), [0.0, np.pi / 2], ExperimentConfig(), drive=0.5)
+    >>> type(reading.hit).__name__, wind.shape, len(frames)
+    ('bool', (2,), 2)
     """
     if drive:
         world.advance(float(drive) / config.speed)

@@ -34,13 +34,63 @@ def write_run(result: RunResult, fh) -> None:
 
 
 def save_run(result: RunResult, path) -> Path:
-    """Write ``result`` to ``path`` atomically (:func:`psgsl_pgm.runs._runner.atomic_write`: a temporary file
-    and ``os.replace``, so a killed run leaves no file)."""
+    """Write ``result`` to ``path`` atomically, as a ``.npz`` archive :func:`load_run` reads back.
+
+    Written through :func:`psgsl_pgm.runs._runner.atomic_write` (a temporary file and ``os.replace``), so a
+    killed run leaves no file; missing parent folders are made.
+
+    Parameters
+    ----------
+    result : RunResult
+        The run's per-step metrics, snapshots and configuration.
+    path : str or path-like
+        The file to write (``.npz``).
+
+    Returns
+    -------
+    path : pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    TypeError
+        ``result`` holds a configuration that does not serialise to JSON.
+    OSError
+        The folder cannot be made or written.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import RunResult
+    >>> def fake_run(seed, n=20):                # per-step metrics of a run, as run_search records them
+    ...     rng = np.random.default_rng(seed)
+    ...     return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), np.linspace(0, 600, n + 1),
+    ...                      rng.uniform(0, 9, (n + 1, 2)), rng.random(n + 1) < 0.2, rng.uniform(0, 5, (n + 1, 3)),
+    ...                      rng.uniform(0, 2, (n + 1, 3)), region_hit=rng.random((n + 1, 3)) < 0.6,
+    ...                      region_area=rng.uniform(1, 30, (n + 1, 3)), hpd_level=rng.uniform(0, 1, (n + 1, 3)))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.experiment import load_run, save_run
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = load_run(save_run(fake_run(4), Path(folder) / "runs" / "a.npz"))
+    >>> back.seed, bool(np.array_equal(back.error, fake_run(4).error))
+    (4, True)
+    """
     return atomic_write(path, write_run, result)
 
 
 def load_run(path) -> RunResult:
     """Read a run written by :func:`save_run`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.npz`` run file.
+
+    Returns
+    -------
+    RunResult
+        The run as it was saved (its estimator under its current name when stored under an older one).
 
     Raises
     ------
@@ -49,6 +99,24 @@ def load_run(path) -> RunResult:
     ValueError
         The file is not a run file written by :func:`save_run` — truncated, corrupt, another archive, missing
         fields — naming the file.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import RunResult
+    >>> def fake_run(seed, n=20):                # per-step metrics of a run, as run_search records them
+    ...     rng = np.random.default_rng(seed)
+    ...     return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), np.linspace(0, 600, n + 1),
+    ...                      rng.uniform(0, 9, (n + 1, 2)), rng.random(n + 1) < 0.2, rng.uniform(0, 5, (n + 1, 3)),
+    ...                      rng.uniform(0, 2, (n + 1, 3)), region_hit=rng.random((n + 1, 3)) < 0.6,
+    ...                      region_area=rng.uniform(1, 30, (n + 1, 3)), hpd_level=rng.uniform(0, 1, (n + 1, 3)))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.experiment import load_run, save_run
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     run = load_run(save_run(fake_run(1), Path(folder) / "run.npz"))
+    >>> run.source, run.estimator, run.error.shape
+    ('oven', 'infotaxis', (21, 3))
     """
     path = Path(path)
     if not path.exists():

@@ -37,12 +37,17 @@ def aligned(runs, name: str, grid) -> np.ndarray:
 
 
 def summarize(runs) -> dict:
-    """Mean and 95 % CI (Student t over runs) of the early and final error and spread, and the calibration of the
-    90 % credible region, per variant.
+    """Mean and 95 % CI over runs of the early and final error and spread, and the calibration of the 90 % region.
 
-    Errors and spreads are distances (≥ 0): their intervals are the t-intervals intersected with [0, ∞)
-    (``mean_ci(..., lower=0)``, which keeps the coverage). Paired differences can be negative and keep the
-    plain t-interval.
+    Per variant: the Student-t interval over runs. Errors and spreads are distances (≥ 0): their intervals are the
+    t-intervals intersected with [0, ∞) (``mean_ci(..., lower=0)``, which keeps the coverage). Paired
+    differences can be negative and keep the plain t-interval.
+
+    Parameters
+    ----------
+    runs : sequence of RunResult
+        Runs of one source and estimator (:func:`run_search`, :func:`load_run`), each with the per-step error,
+        spread and calibration arrays.
 
     Returns
     -------
@@ -55,6 +60,26 @@ def summarize(runs) -> dict:
         area under the error curve, small when the error falls early). ``paired`` holds the mean and CI of
         per-run *differences* (e.g. olfaction − semantics), which is the right test of "lower than" when all
         variants share one observation stream.
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty, or a run's metrics are not finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import RunResult
+    >>> def fake_run(seed, n=20):                # per-step metrics of a run, as run_search records them
+    ...     rng = np.random.default_rng(seed)
+    ...     return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), np.linspace(0, 600, n + 1),
+    ...                      rng.uniform(0, 9, (n + 1, 2)), rng.random(n + 1) < 0.2, rng.uniform(0, 5, (n + 1, 3)),
+    ...                      rng.uniform(0, 2, (n + 1, 3)), region_hit=rng.random((n + 1, 3)) < 0.6,
+    ...                      region_area=rng.uniform(1, 30, (n + 1, 3)), hpd_level=rng.uniform(0, 1, (n + 1, 3)))
+    >>> from psgsl_pgm.experiment import summarize
+    >>> s = summarize([fake_run(0), fake_run(1), fake_run(2)])
+    >>> s["n_runs"], s["seeds"], sorted(s["olfaction"]["final_error"])
+    (3, [0, 1, 2], ['ci95', 'mean'])
     """
     runs = list(runs)
     if not runs:
@@ -122,7 +147,39 @@ def _fmt(stat: dict) -> str:
 
 
 def format_table(summary: dict, *, title: str = "") -> str:
-    """The summary as a plain-text table (metres; mean [95 % CI] over runs)."""
+    """The summary as a plain-text table (metres; mean [95 % CI] over runs), then the calibration columns.
+
+    Parameters
+    ----------
+    summary : dict
+        What :func:`summarize` returns: ``n_runs``, ``seeds`` and one entry per variant of :data:`VARIANTS`.
+    title : str, default "", keyword-only
+        A first line above the table (none when empty).
+
+    Returns
+    -------
+    table : str
+        Lines of fixed-width columns, without a trailing newline.
+
+    Raises
+    ------
+    KeyError
+        ``summary`` lacks a key :func:`summarize` writes (a variant, ``n_runs``, an error or calibration entry).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import RunResult
+    >>> def fake_run(seed, n=20):                # per-step metrics of a run, as run_search records them
+    ...     rng = np.random.default_rng(seed)
+    ...     return RunResult("oven", seed, "infotaxis", np.array([7.5, 0.5]), np.linspace(0, 600, n + 1),
+    ...                      rng.uniform(0, 9, (n + 1, 2)), rng.random(n + 1) < 0.2, rng.uniform(0, 5, (n + 1, 3)),
+    ...                      rng.uniform(0, 2, (n + 1, 3)), region_hit=rng.random((n + 1, 3)) < 0.6,
+    ...                      region_area=rng.uniform(1, 30, (n + 1, 3)), hpd_level=rng.uniform(0, 1, (n + 1, 3)))
+    >>> from psgsl_pgm.experiment import format_table, summarize
+    >>> print(format_table(summarize([fake_run(0), fake_run(1)]), title="two runs").splitlines()[0])
+    two runs
+    """
     head = (f"{'variant':<16} {'error at 1/4':>21} {'final error':>21} {'mean error':>21} "
             f"{'final spread':>21}")
     lines = [title] if title else []

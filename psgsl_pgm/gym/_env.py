@@ -242,6 +242,29 @@ class HouseEnv(gymnasium.Env):
                 "config": ep["config"]}
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode: draw it (or take the one ``options`` names) and run the first look-around.
+
+        Parameters
+        ----------
+        seed : int, optional, keyword-only
+            Seeds the environment's generator, which draws the episodes (gymnasium's convention: given once,
+            then None).
+        options : dict, optional, keyword-only
+            ``{"house": h, "seed": s}`` (and ``"source"`` in the embedded house) picks that episode instead of
+            drawing one.
+
+        Returns
+        -------
+        observation : dict
+            The robot's view after the look-around (the keys of the class's Notes).
+        info : dict
+            ``action_mask``, ``time`` (s), ``house`` and ``seed``.
+
+        Raises
+        ------
+        ValueError
+            ``options`` holds a key other than ``house``, ``seed`` and ``source``.
+        """
         super().reset(seed=seed)
         ep = self._draw(dict(options or {}))
         key = (ep["house"], ep["seed"])  # the house's geometry: FreeSpace shares its caches between runs in it
@@ -255,6 +278,34 @@ class HouseEnv(gymnasium.Env):
         return self._observe(), self._info()
 
     def step(self, action):
+        """Drive to the candidate in slot ``action``, take its readings and frames, and report.
+
+        Parameters
+        ----------
+        action : int
+            A slot of the candidate table, in [0, N); an empty slot a >= K takes the candidate a mod K.
+
+        Returns
+        -------
+        observation : dict
+            The robot's view after the stop.
+        reward : float
+            −``time_cost`` per simulated second of the step, plus the declaration's bonus or penalty.
+        terminated : bool
+            The robot declared the source.
+        truncated : bool
+            The time budget ran out without a declaration.
+        info : dict
+            ``action_mask``, ``time``, ``house``, ``seed``; at the end also ``source`` and, at a declaration,
+            ``declared_correct`` and ``declared_error`` (m).
+
+        Raises
+        ------
+        TypeError
+            ``action`` is not an integer.
+        ValueError
+            ``action`` is outside [0, N), or no episode is running (call :meth:`reset`).
+        """
         if self._episode is None:
             raise ValueError("call reset() before step()")
         if isinstance(action, (bool, np.bool_)) or not isinstance(action, (int, np.integer)) and not (

@@ -26,7 +26,32 @@ CANONICAL = {
 
 
 def canonical_network(name: str):
-    """(problem, model) of canonical network ``name`` (a key of :data:`CANONICAL`), model named ``name``."""
+    """The problem and the pgmpy model of one of the package's canonical networks (the files of ``networks/``).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`CANONICAL`: ``"kitchen_a"``, ``"grid3x3_a"``, ``"grid3x3_b_chain"`` or ``"gas_type_a"``.
+
+    Returns
+    -------
+    problem : SemanticGSLProblem
+        The problem the network is built from.
+    model : pgmpy.models.DiscreteBayesianNetwork
+        Its network (A or B as the name says), with ``model.name == name``.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not a canonical network (the message lists the names).
+
+    Examples
+    --------
+    >>> from psgsl_pgm.networks import canonical_network, network_kind
+    >>> problem, model = canonical_network("kitchen_a")
+    >>> model.name, network_kind(model), problem.n
+    ('kitchen_a', 'A', 4)
+    """
     if name not in CANONICAL:
         raise ValueError(f"unknown canonical network {name!r}; expected one of {sorted(CANONICAL)}")
     factory, builder, _ = CANONICAL[name]

@@ -35,6 +35,21 @@ def network_evidence(model: DiscreteBayesianNetwork) -> dict[str, str]:
 
     Evidence nodes are recognised by their states ``("observed", "other")`` (Z, G, G_i, ζ).
 
+    Parameters
+    ----------
+    model : pgmpy.models.DiscreteBayesianNetwork
+        Network A or B (:func:`build_network_a`, :func:`build_network_b`, or read back from XMLBIF/BIF).
+
+    Returns
+    -------
+    evidence : dict of str to str
+        Node name → observed state, sorted by node name; what pgmpy's queries take as ``evidence``.
+
+    Raises
+    ------
+    ValueError
+        A node of ``model`` has no CPD (pgmpy's ``get_cpds`` raises).
+
     Examples
     --------
     >>> import numpy as np
@@ -55,7 +70,32 @@ def network_evidence(model: DiscreteBayesianNetwork) -> dict[str, str]:
 
 
 def network_kind(model: DiscreteBayesianNetwork) -> str:
-    """``"A"`` (a node S), ``"B-chain"`` (α with one counter parent) or ``"B-table"`` (α over all S_i)."""
+    """Which of the paper's networks ``model`` is.
+
+    Parameters
+    ----------
+    model : pgmpy.models.DiscreteBayesianNetwork
+        A network built by :func:`build_network_a` or :func:`build_network_b` (or read back from a file).
+
+    Returns
+    -------
+    kind : {"A", "B-chain", "B-table"}
+        ``"A"`` (a node S), ``"B-chain"`` (α with one counter parent) or ``"B-table"`` (α over all S_i).
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a pgmpy ``DiscreteBayesianNetwork``.
+    ValueError
+        It has neither a node ``S`` nor a node ``alpha``.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.networks import build_network_b, canonical_network, network_kind
+    >>> problem, model = canonical_network("kitchen_a")
+    >>> network_kind(model), network_kind(build_network_b(problem, "chain")), network_kind(build_network_b(problem, "table"))
+    ('A', 'B-chain', 'B-table')
+    """
     if not isinstance(model, DiscreteBayesianNetwork):
         raise TypeError(f"model must be a pgmpy DiscreteBayesianNetwork, got {type(model).__name__}")
     nodes = set(model.nodes())
@@ -202,9 +242,33 @@ def exact_gas_posterior(model: DiscreteBayesianNetwork, problem: SemanticGSLProb
 
     For a single-gas problem this is ``array([1.0])``.
 
+    Parameters
+    ----------
+    model : pgmpy.models.DiscreteBayesianNetwork
+        Network A or B built from ``problem`` (:func:`build_network_a`, :func:`build_network_b`), or loaded from a
+        file written from it.
+    problem : SemanticGSLProblem
+        The problem the network was built from: it names the cells and the gases (the order of the result).
+
     Returns
     -------
-    posterior : (m,) ndarray
+    posterior : (m,) ndarray of float64
+        p(γ | z, g, ζ) for the problem's m gases, summing to 1.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a pgmpy ``DiscreteBayesianNetwork`` or ``problem`` not a :class:`SemanticGSLProblem`.
+    ValueError
+        ``model`` is neither Network A nor B, the two disagree on the cells, or the evidence is so improbable that
+        exact inference would underflow float64 (use the problem's closed form then).
+
+    Examples
+    --------
+    >>> from psgsl_pgm.networks import build_network_a, canonical_network, exact_gas_posterior
+    >>> problem, model = canonical_network("gas_type_a")
+    >>> bool(abs(exact_gas_posterior(model, problem) - problem.closed_form_gas_posterior()).max() < 1e-10)
+    True
     """
     kind = _check_pair(model, problem)
     if problem.m == 1:

@@ -39,6 +39,30 @@ def _wind_vector(wind) -> np.ndarray:
 def correlation_length(*, diffusivity: float, lifetime: float, wind_speed: float = 0.0) -> float:
     """λ = sqrt(D τ / (1 + V² τ / (4D))) in metres (Vergassola et al. 2007, Methods).
 
+    The distance over which a patch of gas released at the source stays correlated in the advection-diffusion
+    model with decay: the plume's reach across the wind.
+
+    Parameters
+    ----------
+    diffusivity : float, keyword-only
+        Effective (turbulent) diffusivity D, m²/s, > 0.
+    lifetime : float, keyword-only
+        Lifetime τ of a gas patch before it decays, s, > 0.
+    wind_speed : float, default 0.0, keyword-only
+        Mean wind speed V, m/s, >= 0.
+
+    Returns
+    -------
+    length : float
+        λ in metres.
+
+    Raises
+    ------
+    TypeError
+        An argument is not a real number.
+    ValueError
+        ``diffusivity`` or ``lifetime`` is not positive and finite, or ``wind_speed`` is negative or not finite.
+
     Examples
     --------
     >>> round(correlation_length(diffusivity=1.0, lifetime=4.0, wind_speed=0.0), 12)
@@ -125,8 +149,36 @@ def vergassola_encounter_scale(
 ) -> float:
     """κ such that the expected number of encounters in one sample is κ · G, G in s/m² per unit emission.
 
-    κ = R Δt 2π D / ln(λ/a) (m²), from R(r | r0) = 2π D c / ln(λ/a) with c = R G. The hit probability of one
-    sample is then P(hit) = 1 − exp(−κ G) (Poisson encounters).
+    κ = R Δt 2π D / ln(λ/a) (m²), from R(r | r0) = 2π D c / ln(λ/a) with c = R G (Vergassola, Villermaux &
+    Shraiman 2007, Nature 445:406-409, Methods). The hit probability of one sample is then
+    P(hit) = 1 − exp(−κ G) (Poisson encounters).
+
+    Parameters
+    ----------
+    emission_rate : float, keyword-only
+        The source's release rate R, in patches per second, > 0.
+    sample_time : float, keyword-only
+        The duration Δt of one sensor reading, s, > 0.
+    diffusivity : float, keyword-only
+        Effective diffusivity D, m²/s, > 0.
+    lifetime : float, keyword-only
+        Patch lifetime τ, s, > 0.
+    wind_speed : float, keyword-only
+        Mean wind speed V, m/s, >= 0 (it shortens λ, :func:`correlation_length`).
+    sensor_radius : float, keyword-only
+        The sensor's size a, m, > 0 and smaller than λ.
+
+    Returns
+    -------
+    kappa : float
+        The encounter scale κ, m² (so that κ G is a number of encounters).
+
+    Raises
+    ------
+    TypeError
+        An argument is not a real number.
+    ValueError
+        An argument is not positive and finite (``wind_speed``: negative), or ``sensor_radius`` >= λ.
 
     Examples
     --------

@@ -208,10 +208,54 @@ class CalibrationRun:
 
 def hit_log_likelihood(predicted, hits, encounter_scale: float, false_hit_rate: float,
                        missed_hit_rate: float = 0.0) -> float:
-    """Σ_n log P(g_n), P(hit) = ε + (1 − ε)(1 − δ)(1 − exp(−κ c_n)), P(miss) = (1 − ε)[δ + (1 − δ) exp(−κ c_n)]
-    (the hit model of :class:`GridInfotaxis`; δ = ``missed_hit_rate``)."""
-    mu = encounter_scale * np.asarray(predicted, dtype=np.float64)
-    g = np.asarray(hits, dtype=bool)
+    """The log-likelihood of gas readings under the hit model of :class:`GridInfotaxis`.
+
+    Σ_n log P(g_n) with P(hit) = ε + (1 − ε)(1 − δ)(1 − exp(−κ c_n)) and
+    P(miss) = (1 − ε)[δ + (1 − δ) exp(−κ c_n)].
+
+    Parameters
+    ----------
+    predicted : (n,) array_like of float
+        c_n, the plume model's mean concentration per unit emission at each reading (s/m², >= 0):
+        :meth:`CalibrationRun.predicted`.
+    hits : (n,) array_like of bool
+        g_n, whether each reading was a hit (booleans or 0/1).
+    encounter_scale : float
+        κ, m²/s (>= 0): κ c_n is the expected number of encounters of the reading.
+    false_hit_rate : float
+        ε in [0, 1): the probability of a hit from no gas.
+    missed_hit_rate : float, default 0.0
+        δ in [0, 1): the probability that a reading misses the plume whatever the model predicts.
+
+    Returns
+    -------
+    log_likelihood : float
+        In nats; −inf when a hit is impossible under the model (ε = 0 and κ c_n = 0).
+
+    Raises
+    ------
+    TypeError
+        ``hits`` is not boolean (or 0/1), or a rate or κ is not a real number.
+    ValueError
+        ``predicted`` is not a 1-D array of finite non-negative values, ``hits`` has another shape, κ is negative,
+        or a rate lies outside [0, 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import hit_log_likelihood
+    >>> ll = hit_log_likelihood([1.0, 1.0], [True, False], 0.5, 0.0)    # one hit, one miss, P(hit) = 1 − e^(−0.5)
+    >>> bool(np.isclose(ll, np.log(1 - np.exp(-0.5)) - 0.5))
+    True
+    """
+    c = as_float_array(predicted, "predicted", dtype=np.float64)
+    if c.ndim != 1 or not np.isfinite(c).all() or (c < 0).any():
+        raise ValueError(f"predicted must be a (n,) array of finite non-negative values, got shape {c.shape}")
+    g = _hits(hits, c.shape, "predicted")
+    encounter_scale = positive(encounter_scale, "encounter_scale", "m²/s", allow_zero=True)
+    false_hit_rate = unit_interval(false_hit_rate, "false_hit_rate", high_open=True)
+    missed_hit_rate = unit_interval(missed_hit_rate, "missed_hit_rate", high_open=True)
+    mu = encounter_scale * c
     if missed_hit_rate == 0.0:
         with np.errstate(divide="ignore"):
             ll_hit = np.log(-np.expm1(-mu) + false_hit_rate * np.exp(-mu))
@@ -317,6 +361,45 @@ def profile_log_likelihood(runs, diffusivity: float, lifetime: float, *, false_h
 
     κ enters the likelihood only through κ c_n, and for fixed (D, τ) the maximiser is the unique root of a
     monotone score (:func:`encounter_scale_mle`), so the profile over κ is exact.
+
+    Parameters
+    ----------
+    runs : sequence of CalibrationRun
+        Calibration runs with known sources; their readings are pooled.
+    diffusivity : float
+        D, m²/s (> 0), of the plume model the readings are predicted with.
+    lifetime : float
+        τ, s (> 0).
+    false_hit_rate : float, default 0.0, keyword-only
+        ε in [0, 1).
+
+    Returns
+    -------
+    kappa : float
+        κ̂, the maximum-likelihood encounter scale at (D, τ), m²/s.
+    log_likelihood : float
+        The maximised log-likelihood, nats (:func:`hit_log_likelihood` at κ̂).
+
+    Raises
+    ------
+    ValueError
+        The pooled readings hold no hit, or no miss, where the model predicts gas from the source (κ̂ would be 0 or
+        infinite), false hits alone explain the hits, D or τ is not positive, or ε lies outside [0, 1).
+
+    Examples
+    --------
+    A corridor run, 10 m of free cells, the source at its west end and the wind blowing east: readings near the
+    source hit, far ones miss.
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeModel, profile_log_likelihood
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> kappa, ll = profile_log_likelihood([run], 0.01, 30.0, false_hit_rate=0.01)
+    >>> bool(kappa > 0 and ll < 0)
+    True
     """
     c = np.concatenate([r.predicted(diffusivity, lifetime) for r in runs])
     g = np.concatenate([r.hits for r in runs])
@@ -403,8 +486,42 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
 
 
 def hit_residuals(runs, fit: PlumeFit, *, false_hit_rate: float = 0.0) -> list:
-    """Pearson residuals r_n = (g_n − p_n) / sqrt(p_n (1 − p_n)) of each run under ``fit`` (its δ included), in
-    reading order."""
+    """Pearson residuals r_n = (g_n − p_n) / sqrt(p_n (1 − p_n)) of each run under ``fit`` (its δ included).
+
+    p_n is the hit probability of reading n under the fitted hit model; the residuals' lag-one autocorrelation is
+    what :func:`ar1_tempering` turns into the tempering exponent.
+
+    Parameters
+    ----------
+    runs : sequence of CalibrationRun
+        Calibration runs with known sources.
+    fit : PlumeFit
+        The plume parameters (D, τ, κ, δ), e.g. from :func:`fit_plume_parameters`.
+    false_hit_rate : float, default 0.0, keyword-only
+        ε in [0, 1).
+
+    Returns
+    -------
+    residuals : list of (n_r,) ndarray of float64
+        One array per run, in reading order (p_n clipped to [1e-12, 1 − 1e-12], so every residual is finite).
+
+    Raises
+    ------
+    ValueError
+        ``fit``'s D or τ is not positive (the plume model refuses them).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeFit, PlumeModel, hit_residuals
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> r = hit_residuals([run], PlumeFit(0.01, 30.0, 1.0, 0.0), false_hit_rate=0.01)
+    >>> len(r), r[0].shape, bool(np.isfinite(r[0]).all())
+    (1, (19,), True)
+    """
     out = []
     for r in runs:
         c = r.predicted(fit.diffusivity, fit.lifetime)

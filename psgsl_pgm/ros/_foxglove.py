@@ -72,7 +72,46 @@ def _grid_msg(grid, t, values, kind):
 
 
 def write_foxglove(path, episode: Episode):
-    """Write ``episode`` as a Foxglove MCAP file at ``path`` (see the module docstring); returns the path."""
+    """Write ``episode`` as a Foxglove MCAP file at ``path`` (see the module docstring), atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.mcap`` file to write (missing parent folders are made).
+    episode : Episode
+        The robot's log (poses, gas, wind, frames) and, when it holds them, the posteriors and the source.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    TypeError
+        ``episode`` is not an :class:`Episode`.
+    ImportError
+        The ``ros`` extra (foxglove-sdk) is not installed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from psgsl_pgm import GridMap
+    >>> from psgsl_pgm.ros import Episode
+    >>> grid = GridMap(np.zeros((10, 20), bool), 0.1)           # a free 2 m × 1 m room, 0.1 m cells
+    >>> t = np.arange(4.0)                                      # s
+    >>> pose = np.stack([0.3 + 0.25 * t, np.full(4, 0.5), np.zeros(4)], axis=-1)   # x, y in m; yaw in rad
+    >>> episode = Episode(grid=grid, pose_t=t, pose=pose, gas_t=t, gas=[2.0, 0.5, 2.0, 0.5],   # ppm
+    ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[],
+    ...                   threshold=1.0, meta={"seed": 0})
+    >>> from psgsl_pgm.ros import write_foxglove
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_foxglove(Path(folder) / "room.mcap", episode)
+    ...     print(path.name, path.stat().st_size > 0)
+    room.mcap True
+    """
     if not isinstance(episode, Episode):
         raise TypeError(f"episode must be a psgsl_pgm.ros.Episode, got {type(episode).__name__}")
     _require()

@@ -173,7 +173,49 @@ def _reason(exc: BaseException) -> str:
 
 
 def bag_topics(path) -> list:
-    """``[(topic, message type, message count, role or None)]`` of a bag, with the role each would fill."""
+    """Every topic of a bag, with its message type, its message count and the role it would fill.
+
+    The roles are those :func:`read_bag` fills (pose, gas, wind, detections, map, …, :data:`ROLES`), chosen as
+    :func:`read_bag` chooses them without ``topics``: a way to see what a robot's bag holds before reading it.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ROS 2 bag: its folder (sqlite3 or MCAP storage, with ``metadata.yaml``) or an ``.mcap`` file.
+
+    Returns
+    -------
+    list of (str, str, int, str or None)
+        ``(topic, message type, message count, role or None)``, sorted by topic.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file or folder.
+    ValueError
+        ``path`` is not a readable ROS 2 bag.
+    ImportError
+        The ``ros`` extra (rosbags) is not installed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from psgsl_pgm import GridMap
+    >>> from psgsl_pgm.ros import Episode
+    >>> grid = GridMap(np.zeros((10, 20), bool), 0.1)           # a free 2 m × 1 m room, 0.1 m cells
+    >>> t = np.arange(4.0)                                      # s
+    >>> pose = np.stack([0.3 + 0.25 * t, np.full(4, 0.5), np.zeros(4)], axis=-1)   # x, y in m; yaw in rad
+    >>> episode = Episode(grid=grid, pose_t=t, pose=pose, gas_t=t, gas=[2.0, 0.5, 2.0, 0.5],   # ppm
+    ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[],
+    ...                   threshold=1.0, meta={"seed": 0})
+    >>> from psgsl_pgm.ros import bag_topics, write_bag
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     rows = bag_topics(write_bag(Path(folder) / "room.bag", episode))
+    >>> [(topic, role) for topic, _, _, role in rows if role in ("gas", "wind")]
+    [('/gas', 'gas'), ('/wind', 'wind')]
+    """
     folder, reader = _open(path)
     try:
         chosen = _choose(folder, reader.connections, {}, strict=False)

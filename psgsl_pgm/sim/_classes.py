@@ -46,6 +46,23 @@ def _key(name: str) -> str:
 def match_names(names, targets) -> np.ndarray:
     """Index of each name in ``targets``, ignoring case, spaces and punctuation; -1 where absent.
 
+    Parameters
+    ----------
+    names : sequence of str
+        The names to look up (may repeat, may be empty).
+    targets : sequence of str
+        The names they are matched against; the first of several equal keys wins.
+
+    Returns
+    -------
+    (len(names),) ndarray of int64
+        The index into ``targets`` of each name, -1 where none matches.
+
+    Raises
+    ------
+    TypeError
+        ``names`` or ``targets`` is not a sequence of strings.
+
     Examples
     --------
     >>> match_names(["LivingRoom", "Garage"], ["kitchen", "living room"])
@@ -62,7 +79,30 @@ def match_names(names, targets) -> np.ndarray:
 def reindex(labels, names, targets, *, missing: int = -1) -> np.ndarray:
     """Relabel integer ``labels`` (indices into ``names``, -1 = none) as indices into ``targets``.
 
-    Names absent from ``targets`` become ``missing``.
+    Names absent from ``targets`` become ``missing``; the names are matched as :func:`match_names` matches them.
+
+    Parameters
+    ----------
+    labels : array_like of int
+        Any shape; each value an index into ``names``, or -1 for no label.
+    names : sequence of str
+        What the labels index now.
+    targets : sequence of str
+        What the result indexes.
+    missing : int, default -1, keyword-only
+        The label of a name ``targets`` lacks (and of -1).
+
+    Returns
+    -------
+    ndarray of int
+        ``labels``' shape, indices into ``targets``.
+
+    Raises
+    ------
+    TypeError
+        ``labels`` are not integers, or ``names`` / ``targets`` are not sequences of strings.
+    ValueError
+        A label lies outside [-1, len(names) − 1].
 
     Examples
     --------

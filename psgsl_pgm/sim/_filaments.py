@@ -89,13 +89,39 @@ def read_gaden_config(yaml_path) -> tuple[FilamentParams, np.ndarray]:
     """Filament parameters and source position from a GADEN simulation YAML (e.g. the lab's ``B1.yaml``).
 
     Only the keys above and ``source_x``/``source_y``/``source_z`` are read; GADEN's other keys (paths,
-    playback options) are ignored.
+    playback options) are ignored. Keys in GADEN's units are converted to SI.
+
+    Parameters
+    ----------
+    yaml_path : str or path-like
+        The GADEN simulation's YAML file.
 
     Returns
     -------
     params : FilamentParams
-    source : (3,) ndarray
-        (x, y, z) in metres.
+        The keys the file sets; :class:`FilamentParams`' defaults for the others.
+    source : (3,) ndarray of float64
+        (x, y, z) in metres (z = 0 when the file has no ``source_z``).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        The file is not a YAML mapping, a value is not a non-negative number or out of its range, or
+        ``source_x`` / ``source_y`` is missing; the message names the file and key.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import read_gaden_config
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "B1.yaml"
+    ...     _ = path.write_text("{source_x: 2.5, source_y: 1.0, source_z: 0.5}")
+    ...     params, source = read_gaden_config(path)
+    >>> source.tolist()
+    [2.5, 1.0, 0.5]
     """
     path, data = read_yaml_mapping(yaml_path)
     where = str(path)

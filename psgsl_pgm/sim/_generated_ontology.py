@@ -37,16 +37,36 @@ def _cached(seeds: tuple, pseudo_count: float) -> Ontology:
 
 
 def generated_ontology(*, reference_seeds=GENERATOR_REFERENCE_SEEDS, pseudo_count: float = 1.0) -> Ontology:
-    """The ontology a robot brings to generated homes (as :func:`psgsl_pgm.experiment.house_ontology` for the
-    embedded house).
+    """The ontology a robot brings to generated homes (as :func:`psgsl_pgm.experiment.house_ontology` for the embedded
+    house).
 
     * p(o | s, γ): the hand-written table ``psgsl_pgm/data/house_gases.yaml`` (the same as the embedded house's);
     * p(o) = β and p(o | room): cell frequencies of each class in each room type over the generated houses of
       ``reference_seeds`` (never evaluated), with ``pseudo_count`` cells of every class added to every room.
 
+    Parameters
+    ----------
+    reference_seeds : sequence of int, default seeds 1 000 000 – 1 000 019, keyword-only
+        The generated homes the frequencies are counted on (:func:`generate_house` seeds); not the benchmark's.
+    pseudo_count : float, default 1.0, keyword-only
+        Cells of every class added to every room type before normalising (a Dirichlet prior), > 0, so that no class
+        has probability 0 in any room.
+
     Returns
     -------
     Ontology
         Classes :data:`psgsl_pgm.sim.HOUSE_CLASSES`, rooms :data:`psgsl_pgm.sim.HOUSE_ROOMS`.
+
+    Raises
+    ------
+    ValueError
+        ``reference_seeds`` is empty or ``pseudo_count`` is not a positive finite number.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.sim import HOUSE_CLASSES, generated_ontology
+    >>> ontology = generated_ontology(reference_seeds=(1_000_000,))      # counted on one home: a second or two
+    >>> ontology.classes == tuple(HOUSE_CLASSES), ontology.room_table.shape[1] == len(HOUSE_CLASSES)
+    (True, True)
     """
     return _cached(*_reference_arguments(reference_seeds, pseudo_count))

@@ -204,6 +204,26 @@ class House:
 def segment_mask(grid: GridMap, p0, p1, *, width: float) -> np.ndarray:
     """(H, W) bool: cells whose centre lies within ``width`` of the segment p0–p1 (e.g. a window).
 
+    Parameters
+    ----------
+    grid : GridMap
+        The map whose cells are tested.
+    p0, p1 : (float, float)
+        The segment's ends (x, y), metres.
+    width : float, keyword-only
+        The distance from the segment, metres (> 0).
+
+    Returns
+    -------
+    (H, W) ndarray of bool
+
+    Raises
+    ------
+    TypeError
+        ``grid`` is not a :class:`GridMap`, or an end or ``width`` is not made of real numbers.
+    ValueError
+        An end is not a finite (x, y) pair, or ``width`` is not positive and finite.
+
     Examples
     --------
     >>> g = GridMap(np.zeros((4, 6), bool), 1.0)

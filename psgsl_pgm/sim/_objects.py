@@ -234,7 +234,38 @@ def load_objects(yaml_path, *, like: GridMap | None = None, classes=None) -> lis
 
 
 def save_objects(objects, yaml_path) -> Path:
-    """Write objects as an object-list YAML (polygon footprints), readable by :func:`load_objects`."""
+    """Write objects as an object-list YAML (polygon footprints), readable by :func:`load_objects`.
+
+    Parameters
+    ----------
+    objects : iterable of SceneObject
+        The objects: class name, name, footprint polygon (metres) and height range (metres) of each.
+    yaml_path : str or path-like
+        The file to write (replaced if it exists).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    TypeError
+        An element of ``objects`` is not a :class:`SceneObject`.
+    OSError
+        The file cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import default_house, load_objects, save_objects
+    >>> house = default_house(seed=0)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = load_objects(save_objects(house.objects[:3], Path(folder) / "objects.yaml"))
+    >>> [o.class_name for o in back] == [o.class_name for o in house.objects[:3]]
+    True
+    """
     items = []
     for o in objects:
         if not isinstance(o, SceneObject):

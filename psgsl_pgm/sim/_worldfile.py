@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._shared._validate import check_keys
+from .._shared._validate import check_keys, positive
 from .._shared._validate import did_you_mean as _did_you_mean
 from ..core._ontology import Ontology
 from ..geometry._grid import GridMap
@@ -85,9 +85,40 @@ _REGIONS = ("rooms", "free")
 
 
 def navigable(house: House, clearance: float = 0.25) -> np.ndarray:
-    """(H, W) bool: free cells at least ``clearance`` metres from walls, furniture and windows (the tour's rule)."""
+    """(H, W) bool: free cells at least ``clearance`` metres from walls, furniture and windows (the tour's rule).
+
+    Parameters
+    ----------
+    house : House
+        The house; its ``robot_obstacles`` (walls, furniture the robot cannot cross, windows) are kept clear of.
+    clearance : float, default 0.25
+        The least distance, metres (>= 0), from a cell's centre to the nearest obstacle cell.
+
+    Returns
+    -------
+    (H, W) ndarray of bool
+        True where the robot may stand.
+
+    Raises
+    ------
+    TypeError
+        ``house`` is not a :class:`House`, or ``clearance`` is not a real number.
+    ValueError
+        ``clearance`` is negative or not finite.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.sim import default_house, navigable
+    >>> house = default_house(seed=0)
+    >>> free = navigable(house)
+    >>> free.shape == house.grid.shape, bool((free <= house.grid.free).all())
+    (True, True)
+    """
     from scipy import ndimage as ndi
 
+    if not isinstance(house, House):
+        raise TypeError(f"house must be a House, got {type(house).__name__}")
+    clearance = positive(clearance, "clearance", "metres", allow_zero=True)
     blocked = house.robot_obstacles
     return ~blocked & (ndi.distance_transform_edt(~blocked) * house.grid.resolution > clearance)
 

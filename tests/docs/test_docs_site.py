@@ -37,7 +37,8 @@ from ._devtools import Browser, find_chromium
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted(p.stem for p in (ROOT / "notebooks").glob("*.ipynb"))
 PUBLIC_PACKAGES = ("psgsl_pgm", "psgsl_pgm.networks", "psgsl_pgm.olfaction", "psgsl_pgm.sim",
-                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching")
+                   "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching",
+                   "psgsl_pgm.gym")
 DOCS_EXTENSIONS = ("sphinx", "pydata_sphinx_theme", "numpydoc", "myst_nb", "sphinx_gallery",
                    "sphinx-mathjax-offline")
 
