@@ -63,7 +63,9 @@ def _table(out: Path, settings: dict) -> list:
                              "class": b["episode"]["class"], "gas": b["episode"]["gas"],
                              "cpu": b.get("cpu_seconds")}
                             | ({"gas_identified": r.gas_identified, "time_to_gas": r.time_to_gas()}
-                               if r.gas_unknown else {}))
+                               if r.gas_unknown else {})
+                            | ({"several": _several_row(r, settings["budget"])}
+                               if settings.get("sources_per_episode") else {}))
     return rows
 
 
@@ -99,7 +101,51 @@ def _arm_stats(rows, tau: float) -> dict:
                           "rmst": float(np.mean([r["t_reach"] for r in rows])),
                           "note": "secondary: the first pass within the found radius of the source"}}
                if all("reached" in r for r in rows) else {}),
-            **(_gas_stats(rows, tau) if rows and all("gas_identified" in r for r in rows) else {})}
+            **(_gas_stats(rows, tau) if rows and all("gas_identified" in r for r in rows) else {}),
+            **(_several_stats(rows, tau) if rows and all("several" in r for r in rows) else {})}
+
+
+def _several_row(r, budget: float) -> dict:
+    """A run's several-source outcome: per-source times and events (censored at the budget), "all found", the
+    declarations and the false ones."""
+    t, ok = r.source_times()
+    t_all, all_ok = r.time_to_all()
+    n_decl = len(r.declarations) if len(r.declarations) else int(r.declared)
+    return {"n_sources": r.n_sources, "t": np.minimum(t, budget).tolist(), "ok": ok.tolist(),
+            "t_all": min(t_all, budget), "all": bool(all_ok), "declarations": n_decl,
+            "false": r.n_false_declarations}
+
+
+def _several_stats(rows, tau: float) -> dict:
+    """Per source and for "all found" (:mod:`psgsl_pgm.search._several`): success (house-clustered Wilson 95 %),
+    time (RMST with KM, censored at τ), and the false declarations; split by the number of sources."""
+    def block(rs) -> dict:
+        houses = [r["house"] for r in rs]
+        t = np.concatenate([r["several"]["t"] for r in rs])
+        ok = np.concatenate([r["several"]["ok"] for r in rs]).astype(bool)
+        src_houses = [h for r, h in zip(rs, houses) for _ in r["several"]["t"]]
+        per = clustered_wilson(ok, src_houses)
+        t_all = np.array([r["several"]["t_all"] for r in rs])
+        all_ok = np.array([r["several"]["all"] for r in rs], dtype=bool)
+        every = clustered_wilson(all_ok, houses)
+        n_decl = int(sum(r["several"]["declarations"] for r in rs))
+        n_false = int(sum(r["several"]["false"] for r in rs))
+        return {"n": len(rs), "sources": int(ok.size),
+                "source_success": {"value": per["value"], "ci95": per["ci95"]},
+                "source_rmst": {k: v for k, v in rmst(t, ok, tau).items() if k in ("value", "ci95")} | {"tau": tau},
+                "all_found": {"value": every["value"], "ci95": every["ci95"]},
+                "all_found_rmst": {k: v for k, v in rmst(t_all, all_ok, tau).items() if k in ("value", "ci95")}
+                | {"tau": tau},
+                "declarations": n_decl, "false_declarations": n_false,
+                "false_declarations_per_run": n_false / len(rs),
+                "false_declaration_rate": ({"value": n_false / n_decl, "ci95": wilson_interval(n_false, n_decl)}
+                                           if n_decl else None)}
+
+    counts = sorted({r["several"]["n_sources"] for r in rows})
+    out = block(rows)
+    if len(counts) > 1:
+        out["by_count"] = {str(n): block([r for r in rows if r["several"]["n_sources"] == n]) for n in counts}
+    return {"several_sources": out}
 
 
 def _gas_stats(rows, tau: float) -> dict:
