@@ -11,6 +11,12 @@ model is a one-source model, so hits carried from a declared source still pull t
 removal leaves mass on its border; that is the approximation of this model (a noisy-OR likelihood of several
 plumes would explain them away; it needs per-reading likelihood maps that not every estimator has).
 
+**Declaring the next source.** The target belief is conditioned on a further source existing; as the searched
+area grows, its mass crowds into what is left unsearched, where a rule on that conditional mass alone would
+declare a source that may not be there. After k ≥ 1 declarations the rule of :mod:`psgsl_pgm.search._declare`
+therefore uses the robot's unconditional probability that a source lies in D(c*): M · P(N > k | data) ≥ κ (the
+first declaration is unchanged: N ≥ 1 is certain). The stored declared mass is that product.
+
 **Stopping.** The robot's prior over how many sources emit is p(N) on {1, 2, 3}. After k declarations, with no
 further source found so far, Bayes' rule gives the probability that another exists,
 
@@ -24,7 +30,8 @@ where Z is the probability that a further source would have escaped every detect
 prior of where a source is (its estimator's prior, times the semantic term p(s | z) for a semantic variant, on
 the findable cells outside the declared regions, normalised) and P(F̄ | s = c) the product of the "not found
 here" likelihoods of every move (:meth:`DetectionModel.not_found_likelihood`, with the robot's miss
-probability). The robot stops when this falls below κ_N (``more_sources_level``, 0.1). It uses the close-range
+probability). A detection that no declared source explains makes it 1: the detector never fires where no
+source is (:class:`psgsl_pgm.sim.SourceDetector`). The robot stops when this falls below κ_N (``more_sources_level``, 0.1). It uses the close-range
 detector's evidence only, not the gas readings (whose one-source model cannot say how many plumes it smells): a
 conservative rule — it stops once it has looked, without a detection, where the remaining sources would likely
 be. Since a = 0 once k = 3, it always stops at the third declaration.

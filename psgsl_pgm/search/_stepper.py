@@ -18,7 +18,7 @@ readings (:attr:`reading`, :attr:`wind`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -184,6 +184,7 @@ class ClosedLoopEpisode:
             self._ll_not_found = np.zeros(findable.size)
             self._ll_found = np.zeros(findable.size)
             self._excluded = np.zeros(findable.size, bool)
+            self._found_since = False  # a detection away from the declared sources since the last declaration
             self._declared_cells: list = []
         self.declarations: list = []  # (Declaration, time) of each declaration
         self.stopped = False  # the robot stopped declaring: p(another source) fell below the level
@@ -358,7 +359,8 @@ class ClosedLoopEpisode:
             if np.any(post.ravel()[np.isfinite(found_ll)] > 0):  # else the robot's model has no such hypothesis
                 beliefs.condition(found_ll)
                 if self.several:
-                    self._ll_found = self._ll_found + found_ll.ravel()
+                    self._ll_found = self._ll_found + np.asarray(found_ll, dtype=np.float64).ravel()
+                    self._found_since = True
         else:
             nf = detection.not_found_log_likelihood(seg)
             beliefs.condition(nf)  # not found on the way nor at the stop
@@ -376,6 +378,8 @@ class ClosedLoopEpisode:
         self.posterior = post = self._record(stop, self.heading, reading.hit, self.length)
         if self.declaring and world.time - self.t0 <= self.budget:
             proposal = propose_declaration(post, detection, radius=self.search.declare_radius)
+            if self.several and self.declarations:  # the mass given a further source, times P(one exists)
+                proposal = replace(proposal, mass=proposal.mass * self._more_probability())
             if proposal.mass >= self.search.declare_mass:  # the rule (module _declare): M >= κ
                 if not self.several:
                     self.declaration = (proposal, world.time - self.t0)
@@ -405,6 +409,7 @@ class ClosedLoopEpisode:
         self._declared_cells.append(proposal.cell)
         self._excluded |= declared_region(self.detection, proposal.cell, self.search.declare_radius).ravel()
         self._ll_found = np.zeros_like(self._ll_found)
+        self._found_since = False
         ll = self._ll_findable + self._ll_not_found
         ll[self._excluded] = -np.inf
         if len(self.declarations) >= 3 or not np.isfinite(ll).any():
@@ -427,6 +432,8 @@ class ClosedLoopEpisode:
         total = pi.sum()
         if not total > 0:
             return 0.0
+        if self._found_since and np.any(pi * np.exp(self._ll_not_found + self._ll_found) > 0):
+            return 1.0  # a detection no declared source explains: the detector has no false alarms
         escape = float(np.sum(pi * np.exp(self._ll_not_found)) / total)
         return more_sources_probability(self.search.source_count_prior, len(self.declarations), min(escape, 1.0))
 
