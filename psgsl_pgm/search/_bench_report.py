@@ -263,6 +263,28 @@ def _figures(out: Path, stats: dict, conditions) -> list:
     return files
 
 
+def _several_table(arms: dict) -> list:
+    """The several-source table of a condition (empty in a one-source benchmark)."""
+    rows = [(a, d["several_sources"]) for a, d in arms.items() if "several_sources" in d]
+    if not rows:
+        return []
+    lines = ["Several sources per episode (the robot declares them one by one, psgsl_pgm.search._several): "
+             "per source and for all of an episode's sources, success (house-clustered Wilson 95 %) and RMST(τ) "
+             "of the time (KM, censored at τ; per source, its declaration; all, the last of them); false "
+             "declarations per run. The success and RMST above are those of the first source declared.", "",
+             "| arm | N | episodes | sources | source success [95 % CI] | source RMST s | all found [95 % CI] | "
+             "all-found RMST s | false decl. / run |", "|---|---|---|---|---|---|---|---|---|"]
+    for arm, d in rows:
+        parts = [("all", d)] + sorted((d.get("by_count") or {}).items())
+        for n, b in parts:
+            ss, af = b["source_success"], b["all_found"]
+            lines.append(f"| {arm} | {n} | {b['n']} | {b['sources']} | {100 * ss['value']:.0f} % "
+                         f"[{100 * ss['ci95'][0]:.0f}, {100 * ss['ci95'][1]:.0f}] | {_fmt_ci(b['source_rmst'])} | "
+                         f"{100 * af['value']:.0f} % [{100 * af['ci95'][0]:.0f}, {100 * af['ci95'][1]:.0f}] | "
+                         f"{_fmt_ci(b['all_found_rmst'])} | {b['false_declarations_per_run']:.2f} |")
+    return lines + [""]
+
+
 def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, version: str) -> str:
     s = settings
     title = "world file " + s["world"] if s["world"] else f"{len(s['houses'])} generated homes"
@@ -314,6 +336,7 @@ def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, ve
                          f"[{100 * sr['ci95'][0]:.0f}, {100 * sr['ci95'][1]:.0f}] | {_fmt_ci(d['rmst'])} | {med} | "
                          f"{fds} | {des} | {_reached(d)} | {cpu} |")
         lines.append("")
+        lines += _several_table(arms)
     kinds: dict = {}
     for e in episodes.values():
         k = e["class"] or "off-ontology"

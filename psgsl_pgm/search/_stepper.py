@@ -441,11 +441,14 @@ class ClosedLoopEpisode:
 
     def declaration_outcome(self) -> dict:
         """The declaration's fields of :class:`SearchRun` (empty without one): its point, time, error and whether
-        it is right (the scoring reads the simulator's truth)."""
+        it is right (the scoring reads the simulator's truth). With several sources: the first declaration, scored
+        against the nearest source (the time to the first source found)."""
         if self.declaration is None:
             return {}
         proposal, t_dec = self.declaration
         err = declaration_error(proposal.xy, self.truth, self.truth_region)
+        for xy, region in zip(self.world.sources[1:], self._regions[1:]):  # several sources: the nearest
+            err = min(err, declaration_error(proposal.xy, xy, region))
         return {"declared": True, "declared_xy": proposal.xy, "time_to_declare": float(t_dec),
                 "declared_error": err, "declared_correct": bool(err <= self.search.success_radius),
                 "declared_mass": float(proposal.mass)}
