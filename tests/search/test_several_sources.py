@@ -148,3 +148,27 @@ def test_two_sources_far_apart_are_declared_one_after_the_other():
     assert np.isnan(run.more_probability[:k]).all()
     assert run.more_probability[-1] < 0.1 <= np.nanmax(run.more_probability)
     assert run.time[-1] < 1000.0  # it stopped itself
+
+
+@pytest.mark.slow
+def test_a_several_source_benchmark_reports_per_source_and_all_found(tmp_path):
+    import json
+
+    from psgsl_pgm.search import run_benchmark
+
+    out = tmp_path / "b"
+    s = run_benchmark(out=out, houses=1, seeds=2, policies=("infotaxis",), variants=("semantics+rooms",),
+                      conditions=("right-ontology",), search=SearchConfig(time_budget=120.0), workers=1,
+                      progress=False, figures=False, sources_per_episode=(2, 3))
+    episodes = json.loads((out / "episodes.json").read_text())
+    assert all(e["n_sources"] in (2, 3) and len(e["extra"]) == e["n_sources"] - 1 for e in episodes.values())
+    for e in episodes.values():  # the first source is the one-source benchmark's draw, the others apart from it
+        xy = np.array([e["xy"]] + [x["xy"] for x in e["extra"]])
+        d = np.linalg.norm(xy[:, None] - xy[None], axis=-1)
+        assert d[np.triu_indices(len(xy), 1)].min() >= 2.0
+    arm = s["arms"]["right-ontology"]["infotaxis/semantics+rooms"]["several_sources"]
+    assert arm["n"] == 2 and arm["sources"] == sum(e["n_sources"] for e in episodes.values())
+    assert 0.0 <= arm["source_success"]["value"] <= 1.0 and arm["all_found_rmst"]["tau"] == 120.0
+    assert "Several sources per episode" in (out / "report.md").read_text()
+    with pytest.raises(ValueError, match="sources_per_episode"):
+        run_benchmark(out=tmp_path / "c", houses=1, seeds=1, sources_per_episode=4)
