@@ -2,8 +2,10 @@ r"""Several sources: the robot declares them one by one and stops when it no lon
 
 **Model: sequential conditioning.** The robot's estimators hold a belief about *one* source location. With
 several sources it searches for them in turn: its target is "a source not yet declared". After the k-th
-declaration (at c*_k, :mod:`psgsl_pgm.search._declare`) the declared region D(c*_k) is removed from the hypothesis
-space, p(s) ∝ p(s) [s ∉ D(c*_1) ∪ … ∪ D(c*_k)], and the detections that confirmed the declared source (the
+declaration (at c*_k, :mod:`psgsl_pgm.search._declare`) the region E(c*_k) — every cell within
+max(``declare_radius``, ``success_radius``) of c*_k's found region: a source that close would be scored as the
+one declared, so the robot counts it as the same leak — is removed from the hypothesis space,
+p(s) ∝ p(s) [s ∉ E(c*_1) ∪ … ∪ E(c*_k)], and the detections that confirmed the declared source (the
 "found" factors, which concern that source) are dropped; every "not found here" factor stays (a place searched
 without a detection holds no undeclared source either). A later detector firing at a point within reach of a
 declared hypothesis is explained by it and ignored. The gas readings are kept as they are: the estimators' hit
@@ -28,11 +30,11 @@ further source found so far, Bayes' rule gives the probability that another exis
 
 where Z is the probability that a further source would have escaped every detection so far: π(c) the robot's
 prior of where a source is (its estimator's prior, times the semantic term p(s | z) for a semantic variant, on
-the findable cells outside the declared regions, normalised) and P(F̄ | s = c) the product of the "not found
+the findable cells outside the removed regions E, normalised) and P(F̄ | s = c) the product of the "not found
 here" likelihoods of every move (:meth:`DetectionModel.not_found_likelihood`, with the robot's miss
 probability). A detection that no declared source explains makes it 1: the detector never fires where no
-source is (:class:`psgsl_pgm.sim.SourceDetector`). The robot stops when this falls below κ_N (``more_sources_level``, 0.1). It uses the close-range
-detector's evidence only, not the gas readings (whose one-source model cannot say how many plumes it smells): a
+source is (:class:`psgsl_pgm.sim.SourceDetector`). The robot stops when this falls below κ_N
+(``more_sources_level``, 0.1). It uses the close-range detector's evidence only, not the gas readings (whose one-source model cannot say how many plumes it smells): a
 conservative rule — it stops once it has looked, without a detection, where the remaining sources would likely
 be. Since a = 0 once k = 3, it always stops at the third declaration.
 

@@ -407,7 +407,8 @@ class ClosedLoopEpisode:
             self.declaration = (proposal, t)
         self.declarations.append((proposal, t))
         self._declared_cells.append(proposal.cell)
-        self._excluded |= declared_region(self.detection, proposal.cell, self.search.declare_radius).ravel()
+        reach = max(self.search.declare_radius, self.search.success_radius)  # one leak as the scoring counts it
+        self._excluded |= declared_region(self.detection, proposal.cell, reach).ravel()
         self._ll_found = np.zeros_like(self._ll_found)
         self._found_since = False
         ll = self._ll_findable + self._ll_not_found
