@@ -413,7 +413,8 @@ class ClosedLoopEpisode:
         self._found_since = False
         ll = self._ll_findable + self._ll_not_found
         ll[self._excluded] = -np.inf
-        if len(self.declarations) >= 3 or not np.isfinite(ll).any():
+        last = more_sources_probability(self.search.source_count_prior, len(self.declarations), 1.0) == 0.0
+        if last or not np.isfinite(ll).any():
             self.stopped = True  # the prior's largest count, or no hypothesis left
             return
         try:
