@@ -172,3 +172,20 @@ def test_a_several_source_benchmark_reports_per_source_and_all_found(tmp_path):
     assert "Several sources per episode" in (out / "report.md").read_text()
     with pytest.raises(ValueError, match="sources_per_episode"):
         run_benchmark(out=tmp_path / "c", houses=1, seeds=1, sources_per_episode=4)
+
+
+def test_an_unknown_gas_episode_gives_each_source_its_gas_and_only_the_world_knows():
+    from psgsl_pgm.experiment import ExperimentConfig
+    from psgsl_pgm.search._stepper import ClosedLoopEpisode
+
+    ep = ClosedLoopEpisode("oven", 0, "infotaxis", "semantics+rooms", config=ExperimentConfig(gas="unknown"),
+                           gas_type="smoke", extra_sources=("toilet",), extra_gas_types=("ammonia",),
+                           search=SearchConfig(time_budget=40.0, source_count_prior=(0.5, 0.5, 0.0)))
+    assert ep.world.gas_types == ("smoke", "ammonia") and ep.world.n_sources == 2
+    while not ep.done:
+        ep.take(ep.planned_move())
+    run = ep.result()
+    assert run.gas == "smoke" and run.n_sources == 2 and len(run.more_probability) == len(run.time)
+    with pytest.raises(ValueError, match="estimator must be one of"):
+        ClosedLoopEpisode("oven", 0, "infotaxis", "olfaction", "particle-filter",
+                          search=SearchConfig(source_count_prior=(0.5, 0.5, 0.0)))
