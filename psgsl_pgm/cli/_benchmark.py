@@ -74,6 +74,9 @@ def add_parser(subparsers):
     p.add_argument("--gas", choices=["told", "unknown"], default="told",
                    help="'unknown': the robot is not told the episode's gas and infers it with its electronic nose "
                    "(default: told)")
+    p.add_argument("--sources-per-episode", default="1", metavar="N",
+                   help="sources emitting at once per episode: 1-3, or a range such as 1-3 drawn per episode; with "
+                   "more than one the robot declares them one by one (default: %(default)s)")
     p.add_argument("--budget", type=positive_float, default=1000.0,
                    help="time budget per run, s of simulated time (default: %(default)s)")
     p.add_argument("--rooms", type=int, default=None, metavar="N",
@@ -105,9 +108,13 @@ def _run(args) -> int:
     from ..io._output import check_output_dir
     from ..runs._runner import GridInterrupted
     from ..search import SearchConfig
-    from ..search._benchmark import run_benchmark
+    from ..search._benchmark import check_sources_per_episode, run_benchmark
     from ..search._split import benchmark_sample
 
+    try:
+        count = check_sources_per_episode(args.sources_per_episode)
+    except ValueError as exc:  # the option's name, as the user typed it
+        raise ValueError(f"--sources-per-episode: {exc}") from None
     options = {k: v for k, v in (("n_rooms", args.rooms), ("area", args.area), ("room_types", args.room_types))
                if v is not None}
     if args.world is not None and options:
@@ -145,7 +152,8 @@ def _run(args) -> int:
                                 off_rate=args.off_rate, gases=gases, first_house=args.first_house,
                                 house_options=options, workers=args.workers, scheduler=args.scheduler,
                                 config=config, search=search, progress=not args.quiet, figures=not args.no_figures,
-                                command=command, split=args.split, gas_unknown=args.gas == "unknown")
+                                command=command, split=args.split, gas_unknown=args.gas == "unknown",
+                                sources_per_episode=count)
     except GridInterrupted as exc:
         return interrupted(args, exc, where=Path(args.out) / "runs")
     p = summary["primary"]["result"]

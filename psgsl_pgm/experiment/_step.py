@@ -34,7 +34,8 @@ from ._robot_models import robot_detector_model, robot_gas_confusion, robot_hit_
 __all__ = ["VariantPosteriors", "make_estimator", "robot_hit_rule", "semantic_terms", "start_run", "visit"]
 
 
-def start_run(source, seed, estimator, config, *, world=None, world_spec=None, gas_type=None):
+def start_run(source, seed, estimator, config, *, world=None, world_spec=None, gas_type=None, extra_sources=(),
+              extra_gas_types=None):
     """The checked settings and the world of one run (the fixed tour's or the closed loop's).
 
     Parameters
@@ -87,6 +88,11 @@ def start_run(source, seed, estimator, config, *, world=None, world_spec=None, g
 
             gas = draw_gas(setting.ontology.gases, int(seed)) if gas_type is None else gas_type
             extra = {"enose": ElectronicNose(), "gas_type": gas}
+        if len(extra_sources):  # several sources (psgsl_pgm.sim.make_world, "Several sources")
+            extra["extra_sources"] = [parse_source(x) for x in extra_sources]
+            if config.gas == UNKNOWN_GAS:
+                extra["extra_gas_types"] = ([extra["gas_type"]] * len(extra_sources) if extra_gas_types is None
+                                            else list(extra_gas_types))
         world = setting.make_world(int(seed), spec, warm_up=config.warm_up, model=config.world_model, **extra)
     return config, spec, setting, world
 

@@ -15,6 +15,7 @@ from ._grid import run_search_grid, summarize_runs, write_search_outputs
 from ._live import LiveSession, run_live, write_live
 from ._loop import SearchConfig, SearchRun, run_closed_loop
 from ._metrics import credible_region, hpd_level, paired_difference, survival, wilson_interval
+from ._several import match_declarations, more_sources_probability
 from ._open_space import OPEN_SPACE_POLICIES, OpenSpaceSearch, grid_size, hit_probability, open_space_benchmark
 from ._choose import choose
 from ._policies import POLICIES, SCORES, Decision, Situation, score_per_time, travel_time
@@ -50,6 +51,8 @@ __all__ = [
     "hpd_level",
     "kaplan_meier",
     "load_search_run",
+    "match_declarations",
+    "more_sources_probability",
     "nested_bootstrap",
     "open_space_benchmark",
     "paired_comparison",

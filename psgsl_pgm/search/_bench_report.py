@@ -63,7 +63,9 @@ def _table(out: Path, settings: dict) -> list:
                              "class": b["episode"]["class"], "gas": b["episode"]["gas"],
                              "cpu": b.get("cpu_seconds")}
                             | ({"gas_identified": r.gas_identified, "time_to_gas": r.time_to_gas()}
-                               if r.gas_unknown else {}))
+                               if r.gas_unknown else {})
+                            | ({"several": _several_row(r, settings["budget"])}
+                               if settings.get("sources_per_episode") else {}))
     return rows
 
 
@@ -99,7 +101,51 @@ def _arm_stats(rows, tau: float) -> dict:
                           "rmst": float(np.mean([r["t_reach"] for r in rows])),
                           "note": "secondary: the first pass within the found radius of the source"}}
                if all("reached" in r for r in rows) else {}),
-            **(_gas_stats(rows, tau) if rows and all("gas_identified" in r for r in rows) else {})}
+            **(_gas_stats(rows, tau) if rows and all("gas_identified" in r for r in rows) else {}),
+            **(_several_stats(rows, tau) if rows and all("several" in r for r in rows) else {})}
+
+
+def _several_row(r, budget: float) -> dict:
+    """A run's several-source outcome: per-source times and events (censored at the budget), "all found", the
+    declarations and the false ones."""
+    t, ok = r.source_times()
+    t_all, all_ok = r.time_to_all()
+    n_decl = len(r.declarations) if len(r.declarations) else int(r.declared)
+    return {"n_sources": r.n_sources, "t": np.minimum(t, budget).tolist(), "ok": ok.tolist(),
+            "t_all": min(t_all, budget), "all": bool(all_ok), "declarations": n_decl,
+            "false": r.n_false_declarations}
+
+
+def _several_stats(rows, tau: float) -> dict:
+    """Per source and for "all found" (:mod:`psgsl_pgm.search._several`): success (house-clustered Wilson 95 %),
+    time (RMST with KM, censored at τ), and the false declarations; split by the number of sources."""
+    def block(rs) -> dict:
+        houses = [r["house"] for r in rs]
+        t = np.concatenate([r["several"]["t"] for r in rs])
+        ok = np.concatenate([r["several"]["ok"] for r in rs]).astype(bool)
+        src_houses = [h for r, h in zip(rs, houses) for _ in r["several"]["t"]]
+        per = clustered_wilson(ok, src_houses)
+        t_all = np.array([r["several"]["t_all"] for r in rs])
+        all_ok = np.array([r["several"]["all"] for r in rs], dtype=bool)
+        every = clustered_wilson(all_ok, houses)
+        n_decl = int(sum(r["several"]["declarations"] for r in rs))
+        n_false = int(sum(r["several"]["false"] for r in rs))
+        return {"n": len(rs), "sources": int(ok.size),
+                "source_success": {"value": per["value"], "ci95": per["ci95"]},
+                "source_rmst": {k: v for k, v in rmst(t, ok, tau).items() if k in ("value", "ci95")} | {"tau": tau},
+                "all_found": {"value": every["value"], "ci95": every["ci95"]},
+                "all_found_rmst": {k: v for k, v in rmst(t_all, all_ok, tau).items() if k in ("value", "ci95")}
+                | {"tau": tau},
+                "declarations": n_decl, "false_declarations": n_false,
+                "false_declarations_per_run": n_false / len(rs),
+                "false_declaration_rate": ({"value": n_false / n_decl, "ci95": wilson_interval(n_false, n_decl)}
+                                           if n_decl else None)}
+
+    counts = sorted({r["several"]["n_sources"] for r in rows})
+    out = block(rows)
+    if len(counts) > 1:
+        out["by_count"] = {str(n): block([r for r in rows if r["several"]["n_sources"] == n]) for n in counts}
+    return {"several_sources": out}
 
 
 def _gas_stats(rows, tau: float) -> dict:
@@ -221,6 +267,28 @@ def _figures(out: Path, stats: dict, conditions) -> list:
     return files
 
 
+def _several_table(arms: dict) -> list:
+    """The several-source table of a condition (empty in a one-source benchmark)."""
+    rows = [(a, d["several_sources"]) for a, d in arms.items() if "several_sources" in d]
+    if not rows:
+        return []
+    lines = ["Several sources per episode (the robot declares them one by one, psgsl_pgm.search._several): "
+             "per source and for all of an episode's sources, success (house-clustered Wilson 95 %) and RMST(τ) "
+             "of the time (KM, censored at τ; per source, its declaration; all, the last of them); false "
+             "declarations per run. The success and RMST above are those of the first source declared.", "",
+             "| arm | N | episodes | sources | source success [95 % CI] | source RMST s | all found [95 % CI] | "
+             "all-found RMST s | false decl. / run |", "|---|---|---|---|---|---|---|---|---|"]
+    for arm, d in rows:
+        parts = [("all", d)] + sorted((d.get("by_count") or {}).items())
+        for n, b in parts:
+            ss, af = b["source_success"], b["all_found"]
+            lines.append(f"| {arm} | {n} | {b['n']} | {b['sources']} | {100 * ss['value']:.0f} % "
+                         f"[{100 * ss['ci95'][0]:.0f}, {100 * ss['ci95'][1]:.0f}] | {_fmt_ci(b['source_rmst'])} | "
+                         f"{100 * af['value']:.0f} % [{100 * af['ci95'][0]:.0f}, {100 * af['ci95'][1]:.0f}] | "
+                         f"{_fmt_ci(b['all_found_rmst'])} | {b['false_declarations_per_run']:.2f} |")
+    return lines + [""]
+
+
 def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, version: str) -> str:
     s = settings
     title = "world file " + s["world"] if s["world"] else f"{len(s['houses'])} generated homes"
@@ -272,6 +340,7 @@ def _markdown(settings: dict, stats: dict, comp: dict, episodes: dict, files, ve
                          f"[{100 * sr['ci95'][0]:.0f}, {100 * sr['ci95'][1]:.0f}] | {_fmt_ci(d['rmst'])} | {med} | "
                          f"{fds} | {des} | {_reached(d)} | {cpu} |")
         lines.append("")
+        lines += _several_table(arms)
     kinds: dict = {}
     for e in episodes.values():
         k = e["class"] or "off-ontology"

@@ -35,15 +35,17 @@ import yaml
 from .._shared._validate import index, unit_interval
 from ..experiment._config import ESTIMATORS, VARIANTS, ExperimentConfig
 from ..runs._key import digest, run_key, world_key
-from ._episodes import CONDITIONS, check_condition, draw_episode, findable_sources, robot_ontology
+from ._episodes import CONDITIONS, check_condition, draw_episode, draw_sources, findable_sources, robot_ontology
 from ._grid import closed_loop_in_world
 from ._settings import SearchConfig
 from ._policies import POLICIES, SEMANTICS_ALONE
 from ._reactive import REACTIVE
 from ._split import benchmark_sample, check_split
+from ._stepper import SEVERAL_ESTIMATORS
 from ._store import read_run_key, write_search_run
 
-__all__ = ["BENCHMARK_POLICIES", "BENCHMARK_VARIANTS", "benchmark_arms", "benchmark_episode", "run_benchmark"]
+__all__ = ["BENCHMARK_POLICIES", "BENCHMARK_VARIANTS", "benchmark_arms", "benchmark_episode",
+           "check_sources_per_episode", "run_benchmark"]
 
 #: The benchmark's default policies: the four closed-loop baselines and semantics alone.
 BENCHMARK_POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object")
@@ -110,17 +112,52 @@ def condition_world(world_path: Path, world, condition: str, house: int, folder:
 
 
 def benchmark_episode(source, seed, policy, variant, estimator, *, world, world_digest, config, search, label,
-                      gas_type=None):
+                      gas_type=None, extra_sources=(), extra_gas_types=None):
     """One run of the grid: :func:`closed_loop_in_world`, its config marked with the benchmark's ``label``
     (house, condition, episode) so that the report can group the stored runs, and the run's CPU seconds."""
     import time
 
     t0 = time.process_time()
     told = {} if gas_type is None else {"gas_type": gas_type}  # the true gas of an episode the robot is not told
+    if len(extra_sources):  # several sources
+        told |= {"extra_sources": [tuple(x) for x in extra_sources]}
+        if extra_gas_types is not None:
+            told["extra_gas_types"] = list(extra_gas_types)
     run = closed_loop_in_world(source, seed, policy, variant, estimator, world=world, world_digest=world_digest,
                                config=config, search=search, **told)
     run.config["benchmark"] = dict(label, cpu_seconds=time.process_time() - t0)  # for planning; not in the key
     return run
+
+
+def check_sources_per_episode(value):
+    """``sources_per_episode`` checked: an int N in 1–3, a range "lo-hi" or (lo, hi) with 1 <= lo <= hi <= 3
+    (a range of one value is that int); ValueError (TypeError) naming the argument otherwise.
+
+    >>> check_sources_per_episode("1-3"), check_sources_per_episode(2), check_sources_per_episode("2-2")
+    ((1, 3), 2, 2)
+    """
+    text = value
+    if isinstance(value, str):
+        parts = value.strip().split("-")
+        try:
+            nums = [int(p) for p in parts]
+        except ValueError:
+            nums = []
+        if len(nums) not in (1, 2):
+            raise ValueError(f"sources_per_episode must be N or a range lo-hi with 1 <= lo <= hi <= 3, got {text!r}")
+        value = nums[0] if len(nums) == 1 else tuple(nums)
+    if isinstance(value, (list, tuple)):
+        if len(value) != 2 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in value):
+            raise ValueError(f"sources_per_episode must be N or a range (lo, hi) of integers, got {text!r}")
+        lo, hi = int(value[0]), int(value[1])
+        if not 1 <= lo <= hi <= 3:
+            raise ValueError(f"sources_per_episode must be a range with 1 <= lo <= hi <= 3, got {text!r}")
+        return lo if lo == hi else (lo, hi)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"sources_per_episode must be an integer 1-3 or a range, got {text!r}")
+    if not 1 <= int(value) <= 3:
+        raise ValueError(f"sources_per_episode must be 1, 2 or 3 (or a range lo-hi within 1-3), got {text!r}")
+    return int(value)
 
 
 def _check_names(name: str, values, allowed) -> tuple:
@@ -151,7 +188,8 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
                   off_rate: float = 0.1, gases=("smoke",), first_house: int | None = None, house_options=None,
                   workers: int = 2, scheduler: str | None = None, config: ExperimentConfig | None = None,
                   search: SearchConfig | None = None, progress: bool = True, figures: bool = True,
-                  command: str | None = None, split: str = "dev", gas_unknown: bool = False) -> dict:
+                  command: str | None = None, split: str = "dev", gas_unknown: bool = False,
+                  sources_per_episode=1) -> dict:
     """Run (or resume) the benchmark and write its report (module docstring).
 
     Parameters
@@ -191,6 +229,12 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         Do not tell the robot the episode's gas (drawn from ``gases``): it carries an electronic nose and infers
         p(γ | ζ_1:t) (``config.gas = "unknown"``, :func:`psgsl_pgm.search.run_closed_loop`); the report's arms
         gain ``gas_identified`` and ``time_to_gas``.
+    sources_per_episode : int or (int, int), keyword-only
+        Sources emitting at once in each episode: N in 1–3, or a range (lo, hi) from which each episode draws N
+        uniformly (:func:`psgsl_pgm.search._episodes.draw_sources`). With more than one the robot declares
+        sources one by one (``search.source_count_prior``, uniform on {1, 2, 3} unless given) and the report's
+        arms gain ``several_sources``: per-source and "all found" success and RMST, and the false declarations.
+        1 (the default): the one-source benchmark.
 
     Returns
     -------
@@ -269,8 +313,16 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
         raise TypeError(f"gas_unknown must be True or False, got {gas_unknown!r}")
     if gas_unknown:
         config = replace(config, gas="unknown")  # the episode's gas goes to the world only (gas_type below)
+    count = check_sources_per_episode(sources_per_episode)
+    several = count != 1
+    if several and search.source_count_prior is None:  # the robot expects 1-3 sources, uniformly
+        search = replace(search, source_count_prior=(1 / 3, 1 / 3, 1 / 3))
+    if several and estimator not in SEVERAL_ESTIMATORS:
+        raise ValueError(f"estimator must be one of {SEVERAL_ESTIMATORS} with several sources per episode, got "
+                         f"{estimator!r}")
     key = run_key("benchmark", world_part, experiment=config, search=search,
-                  benchmark={"off_rate": off_rate, "gases": list(gases), "estimator": estimator})
+                  benchmark={"off_rate": off_rate, "gases": list(gases), "estimator": estimator}
+                  | ({"sources_per_episode": list(count) if isinstance(count, tuple) else count} if several else {}))
 
     def write(run, fh) -> None:
         run.config["key"] = key
@@ -289,7 +341,9 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
             spec = specs[lab]
             found = findable_sources(spec, found_radius=search.found_radius)
             for s in seed_ids:
-                episodes[f"{lab}/{s}"] = draw_episode(spec, h, s, gases=gases, off_rate=off_rate, sources=found)
+                episodes[f"{lab}/{s}"] = (draw_sources(spec, h, s, count=count, gases=gases, off_rate=off_rate,
+                                                       sources=found) if several else
+                                          draw_episode(spec, h, s, gases=gases, off_rate=off_rate, sources=found))
             for c in conditions:
                 cond_paths[lab, c] = condition_world(paths[lab], spec, c, h, out / "worlds", lab)
         _write_text(out / "episodes.json", json.dumps(episodes, indent=1, sort_keys=True) + "\n")
@@ -299,6 +353,10 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
             ep = episodes[f"{lab}/{s}"]
             cfg = config if gas_unknown else replace(config, gas=ep["gas"])
             told = {"gas_type": ep["gas"]} if gas_unknown else {}
+            if ep.get("extra"):  # several sources (the robot told the gas is told the first source's)
+                told |= {"extra_sources": [tuple(x["xy"]) for x in ep["extra"]]}
+                if gas_unknown:
+                    told["extra_gas_types"] = [x["gas"] for x in ep["extra"]]
             for p, v in benchmark_arms(policies, variants, c):
                 name = f"{lab}__{c}__{p}__{v}__{estimator}__seed{s}.npz"
                 jobs.append(GridJob(out / "runs" / name, benchmark_episode, (tuple(ep["xy"]), s, p, v, estimator),
@@ -311,4 +369,6 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
                     "variants": list(variants), "conditions": list(conditions), "estimator": estimator,
                     "off_rate": off_rate, "gases": list(gases), "budget": search.time_budget,
                     "world": None if world is None else str(world), "command": command}
+        if several:
+            settings["sources_per_episode"] = list(count) if isinstance(count, tuple) else count
         return write_report(out, settings, figures=figures)

@@ -33,7 +33,7 @@ from .._shared._validate import one_of
 from ..core._ontology import Ontology
 from ..sim._classes import OTHER
 
-__all__ = ["CONDITIONS", "draw_episode", "findable_sources", "robot_ontology"]
+__all__ = ["CONDITIONS", "draw_episode", "draw_sources", "findable_sources", "robot_ontology"]
 
 #: The benchmark's conditions (module docstring).
 CONDITIONS = ("right-ontology", "wrong-ontology", "no-rooms")
@@ -92,7 +92,7 @@ def findable_sources(world, *, found_radius: float = 0.5, seed: int = 0) -> dict
     return {"objects": keep, "floor": np.flatnonzero(floor)}
 
 
-def draw_episode(world, house: int, seed: int, *, gases, off_rate: float, sources: dict) -> dict:
+def draw_episode(world, house: int, seed: int, *, gases, off_rate: float, sources: dict, draw: int = 0) -> dict:
     """One episode's gas and source (module docstring).
 
     Parameters
@@ -106,6 +106,9 @@ def draw_episode(world, house: int, seed: int, *, gases, off_rate: float, source
         Probability of an off-ontology source, in [0, 1].
     sources : dict
         :func:`findable_sources` of the world.
+    draw : int, keyword-only
+        0: the episode's (first) source; k ≥ 1: the k-th further draw of an episode with several sources
+        (:func:`draw_sources`), from its own generator ``default_rng([h, s, 0x5_0E_CE, k])``.
 
     Returns
     -------
@@ -116,7 +119,7 @@ def draw_episode(world, house: int, seed: int, *, gases, off_rate: float, source
     from ..io._coco import canonical_class
     from ..sim._worldfile import _true_class
 
-    rng = np.random.default_rng([int(house), int(seed), _SOURCE_TAG])
+    rng = np.random.default_rng([int(house), int(seed), _SOURCE_TAG] + ([int(draw)] if draw else []))
     gas = str(gases[int(rng.integers(len(gases)))])
     ont = world.ontology
     row = ont.source_likelihood(gas)
@@ -140,3 +143,38 @@ def draw_episode(world, house: int, seed: int, *, gases, off_rate: float, source
     obj = by_class[cls][int(rng.integers(len(by_class[cls])))]
     xy = obj.center
     return {"gas": gas, "kind": "object", "class": cls, "object": obj.name, "xy": [float(xy[0]), float(xy[1])]}
+
+
+_COUNT_TAG = 0x5EC0
+
+
+def draw_sources(world, house: int, seed: int, *, count, gases, off_rate: float, sources: dict,
+                 min_distance: float = 2.0) -> dict:
+    """An episode with several sources: the first as :func:`draw_episode` draws it (so an episode's first source is
+    the one-source benchmark's), and ``"extra"``: the further ones, each drawn the same way (its own gas and
+    place) from further generators, redrawn while it lies within ``min_distance`` m of a source already drawn
+    (two sources that close would count as one declaration). The number of sources is ``count`` (an int in 1–3)
+    or drawn uniformly from a range ``(lo, hi)`` with ``default_rng([h, s, 0x5EC0])``.
+
+    Returns
+    -------
+    dict
+        :func:`draw_episode`'s fields plus ``"n_sources"`` and ``"extra"`` (a list of :func:`draw_episode` dicts).
+    """
+    if isinstance(count, tuple):
+        lo, hi = count
+        n = int(np.random.default_rng([int(house), int(seed), _COUNT_TAG]).integers(lo, hi + 1))
+    else:
+        n = int(count)
+    first = draw_episode(world, house, seed, gases=gases, off_rate=off_rate, sources=sources)
+    chosen = [np.array(first["xy"])]
+    extra, k = [], 1
+    while len(extra) < n - 1:
+        if k > 200:
+            raise ValueError(f"{world.path}: cannot place {n} sources at least {min_distance:g} m apart")
+        ep = draw_episode(world, house, seed, gases=gases, off_rate=off_rate, sources=sources, draw=k)
+        k += 1
+        if min(np.linalg.norm(np.array(ep["xy"]) - c) for c in chosen) >= min_distance:
+            extra.append(ep)
+            chosen.append(np.array(ep["xy"]))
+    return first | {"n_sources": n, "extra": extra}

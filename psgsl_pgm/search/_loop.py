@@ -55,7 +55,8 @@ __all__ = ["ENDS", "SearchConfig", "SearchRun", "run_closed_loop"]
 def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", variant: str = "semantics+rooms",
                     estimator: str = "infotaxis", *, config: ExperimentConfig | None = None,
                     search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
-                    world_spec=None, recorder=None, gas_type: str | None = None) -> SearchRun:
+                    world_spec=None, recorder=None, gas_type: str | None = None, extra_sources=(),
+                    extra_gas_types=None) -> SearchRun:
     """Run one closed-loop search in the simulated house: the robot senses, updates its beliefs, chooses its next
     stop, and declares the source (module docstring).
 
@@ -99,6 +100,12 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
         :func:`psgsl_pgm.experiment._step.start_run`). The robot is not told it: it infers p(γ | ζ_1:t) from its
         electronic nose at every stop, and its semantic term, φ_O and P_f use the gas mixture
         Σ_γ p(γ | ζ) p(s | z, γ).
+    extra_sources : sequence, keyword-only
+        Further true sources that emit at the same time (0–2, each given as ``source``): the world sums their plumes
+        and its detector reports any of them (:func:`psgsl_pgm.sim.make_world`). A robot told to expect several
+        (``search.source_count_prior``) declares them one by one (:mod:`psgsl_pgm.search._several`).
+    extra_gas_types : sequence of str, optional, keyword-only
+        With the gas unknown: each further source's gas (default: the first source's).
 
     Returns
     -------
@@ -123,7 +130,8 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     """
 
     episode = ClosedLoopEpisode(source, seed, policy, variant, estimator, config=config, search=search, world=world,
-                                space=space, world_spec=world_spec, recorder=recorder, gas_type=gas_type)
+                                space=space, world_spec=world_spec, recorder=recorder, gas_type=gas_type,
+                                extra_sources=extra_sources, extra_gas_types=extra_gas_types)
     while not episode.done:  # one stop per pass (ClosedLoopEpisode.take)
         episode.take(episode.planned_move())
     return episode.result()

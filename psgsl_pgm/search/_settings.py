@@ -61,6 +61,14 @@ class SearchConfig:
         m, the reach of the declared region around the declared hypothesis's found region.
     success_radius : float
         m: a declaration is right when it lies this close to the source (to the source object's footprint).
+    source_count_prior : (3,) tuple of float or None
+        p(N) on N ∈ {1, 2, 3}, the robot's prior over how many sources emit. None (the default): the robot
+        believes in one source and the run ends at its first declaration. Given: it declares sources one by one
+        — after each declaration the declared region is removed from its hypothesis space — and stops when its
+        probability that a further source exists falls below ``more_sources_level`` (or at the budget)
+        (:mod:`psgsl_pgm.search._several`). Needs ``end="declare"``.
+    more_sources_level : float
+        In (0, 1): the robot stops declaring when p(another source | what it saw) falls below this.
     """
 
     found_radius: float = 0.5
@@ -78,6 +86,8 @@ class SearchConfig:
     declare_mass: float = 0.9
     declare_radius: float = 0.5
     success_radius: float = 1.0
+    source_count_prior: tuple | None = None
+    more_sources_level: float = 0.1
 
     def __post_init__(self):
         for f in fields(self):
@@ -98,9 +108,16 @@ class SearchConfig:
                 v = unit_interval(v, "declare_mass", low_open=True, high_open=True)
             elif f.name == "far_spacing" and v is None:
                 pass
+            elif f.name == "source_count_prior":
+                v = None if v is None else _count_prior(v)
+            elif f.name == "more_sources_level":
+                v = unit_interval(v, "more_sources_level", low_open=True, high_open=True)
             else:
                 v = positive(v, f.name, "metres" if f.name != "time_budget" else "seconds")
             object.__setattr__(self, f.name, v)
+        if self.source_count_prior is not None and self.end != "declare":
+            raise ValueError(f"source_count_prior needs end='declare' (sources are declared one by one), got "
+                             f"end={self.end!r}")
 
     def to_dict(self) -> dict:
         """The settings as JSON types. The default ``score`` is left out (as runs stored before the option
@@ -112,11 +129,24 @@ class SearchConfig:
         d["start"] = list(self.start)
         if d["score"] == "per-time":
             del d["score"]
+        if self.source_count_prior is None:  # a one-source robot: the settings of runs stored before, unchanged
+            del d["source_count_prior"], d["more_sources_level"]
+        else:
+            d["source_count_prior"] = list(self.source_count_prior)
         if self.end == "reach":  # the settings of runs stored before declarations, unchanged
             for k in ("end", "declare_mass", "declare_radius", "success_radius"):
                 del d[k]
             d["miss_probability"] = 0.0 if self.miss_probability is None else self.miss_probability
         return d
+
+
+def _count_prior(v) -> tuple:
+    """p(N) on {1, 2, 3} as a checked tuple (ValueError naming ``source_count_prior`` otherwise)."""
+    a = np.asarray(v, dtype=np.float64) if not isinstance(v, (str, bytes)) else np.zeros(0)
+    if a.shape != (3,) or not np.isfinite(a).all() or (a < 0).any() or abs(a.sum() - 1.0) > 1e-9 or a[0] == 1.0:
+        raise ValueError(f"source_count_prior must be p(N) for N = 1, 2, 3: three non-negative numbers summing to "
+                         f"1 with some mass on N > 1, got {v!r}")
+    return tuple(float(x) for x in a)
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,6 +208,17 @@ class SearchRun:
         The gases of the robot's belief p(γ | ζ_1:t), in the order of ``gas_probs``'s columns; () when told.
     gas_probs : (n + 1, m) ndarray
         p(γ | ζ_1:t) at each stop (step 0: the uniform prior); (0, 0) when the gas was told.
+    sources_xy : (N, 2) ndarray
+        Every true source, m, in an episode with several (the first is ``source_xy``); (0, 2) for one source.
+    declarations : (k, 4) ndarray
+        Every declaration of a robot that declares sources one by one (``source_count_prior``): rows (x m, y m,
+        time s, mass M); (0, 4) otherwise (its one declaration is in ``declared_*``).
+    declared_source : (k,) ndarray of int
+        The true source each declaration names (index into ``sources_xy``, each source matched at most once, in
+        declaration order, within ``success_radius``), −1 for a false declaration.
+    more_probability : (n + 1,) ndarray
+        p(another source | what the robot saw) at each stop (NaN before the first declaration); empty for a
+        one-source robot.
     """
 
     source: str
@@ -213,6 +254,46 @@ class SearchRun:
     gas: str = ""
     gas_names: tuple = ()
     gas_probs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    sources_xy: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    declarations: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    declared_source: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    more_probability: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def several(self) -> bool:
+        """Whether the run has several sources or a robot that declares them one by one."""
+        return bool(len(self.sources_xy) or len(self.more_probability))
+
+    @property
+    def n_sources(self) -> int:
+        """How many sources emitted."""
+        return max(len(self.sources_xy), 1)
+
+    def source_times(self) -> tuple[np.ndarray, np.ndarray]:
+        """((N,) s until each source was rightly declared or the budget, (N,) bool whether it was): the event
+        times of the per-source survival statistics, censored at the budget."""
+        budget = float(self.config["search"]["time_budget"])
+        t, ok = np.full(self.n_sources, budget), np.zeros(self.n_sources, bool)
+        if len(self.declarations):
+            for (_, _, when, _), j in zip(self.declarations, self.declared_source):
+                if j >= 0 and when <= budget:
+                    t[j], ok[j] = when, True
+        elif self.declared_correct:  # a one-source robot: its one declaration names the first source
+            t[0], ok[0] = float(self.time_to_declare), True
+        return t, ok
+
+    def time_to_all(self) -> tuple[float, bool]:
+        """(s until every source was rightly declared — the last of them —, whether all were); the budget when
+        not all were (censored)."""
+        t, ok = self.source_times()
+        return (float(t.max()), True) if ok.all() else (float(self.config["search"]["time_budget"]), False)
+
+    @property
+    def n_false_declarations(self) -> int:
+        """Declarations that named no source (or one already declared)."""
+        if len(self.declarations):
+            return int((self.declared_source < 0).sum())
+        return int(self.false_declaration)
 
     @property
     def gas_unknown(self) -> bool:

@@ -18,7 +18,7 @@ readings (:attr:`reading`, :attr:`wind`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -26,15 +26,20 @@ from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import _error_and_spread
 from ..experiment._step import VariantPosteriors, robot_hit_rule, start_run, visit
 from ..experiment._tour import exploration_tour
-from ._declare import declaration_error, propose_declaration
+from ._declare import declaration_error, declared_region, propose_declaration
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
 from ._choose import choose
 from ._policies import POLICIES, Situation, check_semantics_alone
 from ._settings import SearchConfig, SearchRun
+from ._several import match_declarations, more_sources_probability
 from ._space import FreeSpace
 
-__all__ = ["ClosedLoopEpisode", "Move"]
+__all__ = ["ClosedLoopEpisode", "Move", "SEVERAL_ESTIMATORS"]
+
+#: The estimators that declare several sources one by one (their posterior is re-assimilated after a declaration,
+#: :meth:`psgsl_pgm.olfaction.OlfactoryEstimator.recondition`).
+SEVERAL_ESTIMATORS = ("infotaxis", "analytic-plume")
 
 
 @dataclass(frozen=True)
@@ -87,6 +92,7 @@ class ClosedLoopEpisode:
     Parameters
     ----------
     source, seed, policy, variant, estimator, config, search, world, space, world_spec, recorder, gas_type
+    extra_sources, extra_gas_types
         As :func:`psgsl_pgm.search.run_closed_loop`; ``policy`` None: the moves come from outside
         (:meth:`move_to`), and :meth:`result` labels the run ``"external"``.
 
@@ -111,7 +117,8 @@ class ClosedLoopEpisode:
     def __init__(self, source="oven", seed: int = 0, policy: str | None = "infotaxis",
                  variant: str = "semantics+rooms", estimator: str = "infotaxis", *,
                  config: ExperimentConfig | None = None, search=None, world=None, space: FreeSpace | None = None,
-                 world_spec=None, recorder=None, gas_type: str | None = None):
+                 world_spec=None, recorder=None, gas_type: str | None = None, extra_sources=(),
+                 extra_gas_types=None):
 
         search = SearchConfig() if search is None else search
         if not isinstance(search, SearchConfig):
@@ -122,8 +129,13 @@ class ClosedLoopEpisode:
             raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
         if policy is not None:
             check_semantics_alone(policy, variant)
+        self.several = search.source_count_prior is not None  # declares sources one by one (module _several)
+        if self.several and estimator not in SEVERAL_ESTIMATORS:
+            raise ValueError(f"estimator must be one of {SEVERAL_ESTIMATORS} with source_count_prior (their "
+                             f"posterior is re-assimilated after each declaration), got {estimator!r}")
+        more = {} if not len(extra_sources) else {"extra_sources": extra_sources, "extra_gas_types": extra_gas_types}
         config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec,
-                                                 gas_type=gas_type)
+                                                 gas_type=gas_type, **more)
         if recorder is not None:
             world = recorder.watch(world)
         house = world.house
@@ -156,10 +168,27 @@ class ClosedLoopEpisode:
         self.truth_hypothesis = detection.source_cell(truth, world.source_object, house)
         self.truth_region = (detection.centres[detection.region_mask(self.truth_hypothesis).ravel()]
                              if world.source_object is not None else None)  # the scoring's footprint of an object
+        self._hyps = [self.truth_hypothesis]  # every source's hypothesis (the truth: the success rule only)
+        self._regions = [self.truth_region]
+        for xy, obj in zip(world.sources[1:], world.source_objects[1:]):
+            h = detection.source_cell(xy, obj, house)
+            self._hyps.append(h)
+            self._regions.append(detection.centres[detection.region_mask(h).ravel()] if obj is not None else None)
         space.cover(detection)  # stops that can find every findable source (FreeSpace.cover)
         start_cell = space.snap(start_xy)
         # the robot searches for a source it can find: p(s) ∝ p(s) [s findable] (FreeSpace.findable)
-        beliefs.condition(np.where(space.findable(detection, start_cell), 0.0, -np.inf))
+        findable = np.where(space.findable(detection, start_cell), 0.0, -np.inf)
+        beliefs.condition(findable)
+        if self.several:  # the factors kept apart, to drop a declared source's (module _several)
+            self._ll_findable = findable.ravel().astype(np.float64)
+            self._ll_not_found = np.zeros(findable.size)
+            self._ll_found = np.zeros(findable.size)
+            self._excluded = np.zeros(findable.size, bool)
+            self._found_since = False  # a detection away from the declared sources since the last declaration
+            self._declared_cells: list = []
+        self.declarations: list = []  # (Declaration, time) of each declaration
+        self.stopped = False  # the robot stopped declaring: p(another source) fell below the level
+        self._more = [float("nan")] if self.several else []
         # end="reach": the detector's misses drawn as runs stored before declarations drew them
         self._misses = (np.random.default_rng([int(seed), 0x5EA2C4])
                         if not self.declaring and robot_m > 0 else None)
@@ -197,7 +226,11 @@ class ClosedLoopEpisode:
     # --- the success rule (the simulator's truth: scoring only) -------------------------------------------------
 
     def _near(self, points) -> np.ndarray:  # the success rule: the detection model with the truth as hypothesis
-        return self.detection.found(np.asarray(points, dtype=np.float64).reshape(-1, 2), self.truth_hypothesis)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        out = self.detection.found(pts, self.truth_hypothesis)
+        for h in self._hyps[1:]:  # several sources: within reach of any
+            out = out | self.detection.found(pts, h)
+        return out
 
     def _found_on(self, seg) -> np.ndarray:  # the success rule where the robot truly is as it passes seg's points
         arcs = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(seg, axis=0), axis=1))])
@@ -234,7 +267,8 @@ class ClosedLoopEpisode:
 
     @property
     def done(self) -> bool:
-        return (self.found and not self.declaring) or self.declaration is not None or self.time >= self.budget
+        return ((self.found and not self.declaring) or (self.declaration is not None and not self.several)
+                or self.stopped or self.time >= self.budget)
 
     def situation(self) -> Situation:
         """What a policy may look at now (:class:`psgsl_pgm.search.Situation`)."""
@@ -300,7 +334,9 @@ class ClosedLoopEpisode:
                     self.path_pts.extend(seg[1 : k + 1])
                     world.advance(arc / config.speed)
                     return
-        elif hits_on_path.any():
+        if self.declaring and self.several and self.declarations:  # a firing where a declared source is: explained
+            hits_on_path = hits_on_path & ~self._near_declared(seg)
+        if self.declaring and hits_on_path.any():
             k = int(np.argmax(hits_on_path))
             if not self.found:  # the first pass within reach (a secondary time; it does not end the run)
                 t = world.time - self.t0 + self._arc_to(seg, k) / config.speed
@@ -322,8 +358,14 @@ class ClosedLoopEpisode:
                 found_ll = detection.found_log_likelihood(seg[-1:])   # found from the point, first or not
             if np.any(post.ravel()[np.isfinite(found_ll)] > 0):  # else the robot's model has no such hypothesis
                 beliefs.condition(found_ll)
+                if self.several:
+                    self._ll_found = self._ll_found + np.asarray(found_ll, dtype=np.float64).ravel()
+                    self._found_since = True
         else:
-            beliefs.condition(detection.not_found_log_likelihood(seg))  # not found on the way nor at the stop
+            nf = detection.not_found_log_likelihood(seg)
+            beliefs.condition(nf)  # not found on the way nor at the stop
+            if self.several:
+                self._ll_not_found = self._ll_not_found + np.asarray(nf, dtype=np.float64).ravel()
         if beliefs.gas_belief is not None:  # the e-nose names the gas of the same window
             beliefs.observe_smell(world.sniff())
         beliefs.observe(stop, reading, wind, frames)
@@ -336,21 +378,95 @@ class ClosedLoopEpisode:
         self.posterior = post = self._record(stop, self.heading, reading.hit, self.length)
         if self.declaring and world.time - self.t0 <= self.budget:
             proposal = propose_declaration(post, detection, radius=self.search.declare_radius)
+            if self.several and self.declarations:  # the mass given a further source, times P(one exists)
+                proposal = replace(proposal, mass=proposal.mass * self._more_probability())
             if proposal.mass >= self.search.declare_mass:  # the rule (module _declare): M >= κ
-                self.declaration = (proposal, world.time - self.t0)
+                if not self.several:
+                    self.declaration = (proposal, world.time - self.t0)
+                else:
+                    self._declare(proposal, world.time - self.t0)
+        if self.several:
+            self._more.append(self._more_probability() if self.declarations else float("nan"))
+            if self.declarations and self._more[-1] < self.search.more_sources_level:
+                self.stopped = True
+
+    # --- several sources (module _several) -----------------------------------------------------------------------
+
+    def _near_declared(self, seg) -> np.ndarray:
+        """(p,) whether each believed point of ``seg`` is within reach of a declared hypothesis (robot side)."""
+        pts = np.asarray(seg, dtype=np.float64).reshape(-1, 2)
+        out = np.zeros(len(pts), bool)
+        for c in self._declared_cells:
+            out |= self.detection.found(pts, c)
+        return out
+
+    def _declare(self, proposal, t: float) -> None:
+        """Declare ``proposal`` and condition the target belief on "a source not yet declared": the declared
+        region removed, the declared source's "found" factors dropped, the "not found" ones kept."""
+        if self.declaration is None:
+            self.declaration = (proposal, t)
+        self.declarations.append((proposal, t))
+        self._declared_cells.append(proposal.cell)
+        reach = max(self.search.declare_radius, self.search.success_radius)  # one leak as the scoring counts it
+        self._excluded |= declared_region(self.detection, proposal.cell, reach).ravel()
+        self._ll_found = np.zeros_like(self._ll_found)
+        self._found_since = False
+        ll = self._ll_findable + self._ll_not_found
+        ll[self._excluded] = -np.inf
+        last = more_sources_probability(self.search.source_count_prior, len(self.declarations), 1.0) == 0.0
+        if last or not np.isfinite(ll).any():
+            self.stopped = True  # the prior's largest count, or no hypothesis left
+            return
+        try:
+            self.beliefs.estimator.recondition(ll)
+        except ValueError:  # nothing the robot's model allows is left to search
+            self.stopped = True
+            return
+        self.posterior = self.beliefs.posteriors((self.variant,))[0]
+
+    def _more_probability(self) -> float:
+        """P(N > k | data) of module _several: Z from the robot's prior of a source's place and its "not found"
+        factors."""
+        pi = np.asarray(self.beliefs.estimator.prior, dtype=np.float64).ravel().copy()
+        if self.variant != "olfaction":
+            pi = pi * np.asarray(self.beliefs.semantic(self.variant), dtype=np.float64).ravel()
+        pi[~np.isfinite(self._ll_findable) | self._excluded] = 0.0
+        total = pi.sum()
+        if not total > 0:
+            return 0.0
+        if self._found_since and np.any(pi * np.exp(self._ll_not_found + self._ll_found) > 0):
+            return 1.0  # a detection no declared source explains: the detector has no false alarms
+        escape = float(np.sum(pi * np.exp(self._ll_not_found)) / total)
+        return more_sources_probability(self.search.source_count_prior, len(self.declarations), min(escape, 1.0))
 
     # --- the run ------------------------------------------------------------------------------------------------
 
     def declaration_outcome(self) -> dict:
         """The declaration's fields of :class:`SearchRun` (empty without one): its point, time, error and whether
-        it is right (the scoring reads the simulator's truth)."""
+        it is right (the scoring reads the simulator's truth). With several sources: the first declaration, scored
+        against the nearest source (the time to the first source found)."""
         if self.declaration is None:
             return {}
         proposal, t_dec = self.declaration
         err = declaration_error(proposal.xy, self.truth, self.truth_region)
+        for xy, region in zip(self.world.sources[1:], self._regions[1:]):  # several sources: the nearest
+            err = min(err, declaration_error(proposal.xy, xy, region))
         return {"declared": True, "declared_xy": proposal.xy, "time_to_declare": float(t_dec),
                 "declared_error": err, "declared_correct": bool(err <= self.search.success_radius),
                 "declared_mass": float(proposal.mass)}
+
+    def several_outcome(self) -> dict:
+        """The several-source fields of :class:`SearchRun` (empty for one source and a one-source robot)."""
+        if not self.several and len(self._hyps) == 1:
+            return {}
+        out = {"sources_xy": self.world.sources}
+        if self.several:
+            rows = np.array([[p.xy[0], p.xy[1], t, p.mass] for p, t in self.declarations]).reshape(-1, 4)
+            out |= {"declarations": rows, "more_probability": np.array(self._more),
+                    "declared_source": match_declarations(rows[:, :2], self.world.sources,
+                                                          radius=self.search.success_radius,
+                                                          regions=self._regions)}
+        return out
 
     def gas_outcome(self) -> dict:
         """The gas fields of :class:`SearchRun` when the robot was not told the gas (empty otherwise): the true gas,
@@ -374,4 +490,5 @@ class ClosedLoopEpisode:
                          np.array(self.path_pts), self.posterior.astype(np.float32),
                          {"experiment": self.config.to_dict(),
                           "search": self.search.to_dict() | {"start": [float(v) for v in self.start_xy]}},
-                         arrays["hpd_level"], **self.gas_outcome(), **self.declaration_outcome())
+                         arrays["hpd_level"], **self.gas_outcome(), **self.declaration_outcome(),
+                         **self.several_outcome())

@@ -23,6 +23,9 @@ _ARRAYS = ("source_xy", "time", "position", "heading", "hit", "path_length", "er
 _DECLARATION = ("declared", "declared_xy", "time_to_declare", "declared_error", "declared_correct", "declared_mass")
 #: The gas belief of a run whose gas the robot was not told (:class:`SearchRun`); written by those runs only.
 _GAS = ("gas", "gas_names", "gas_probs")
+#: The several-source fields (:class:`SearchRun`); written by runs with several sources or a robot that declares
+#: them one by one only (runs without them read as one source).
+_SEVERAL = ("sources_xy", "declarations", "declared_source", "more_probability")
 
 
 def search_run_path(directory, source, policy: str, variant: str, estimator: str, seed: int) -> Path:
@@ -39,7 +42,8 @@ def write_search_run(run: SearchRun, fh) -> None:
         config=np.array(json.dumps(run.config, sort_keys=True)), estimator_naming=np.array(ESTIMATOR_NAMING),
         **{k: getattr(run, k) for k in _ARRAYS},
         **{k: np.asarray(getattr(run, k)) for k in _DECLARATION},
-        **({k: np.asarray(getattr(run, k)) for k in _GAS} if run.gas_unknown else {}))
+        **({k: np.asarray(getattr(run, k)) for k in _GAS} if run.gas_unknown else {}),
+        **({k: np.asarray(getattr(run, k)) for k in _SEVERAL} if run.several else {}))
 
 
 def save_search_run(run: SearchRun, path) -> Path:
@@ -62,6 +66,8 @@ def load_search_run(path) -> SearchRun:
             if "gas_probs" in names:  # a run whose gas the robot was not told
                 arrays |= {"gas": str(z["gas"]), "gas_names": tuple(str(g) for g in z["gas_names"]),
                            "gas_probs": z["gas_probs"]}
+            if "declarations" in names:  # several sources
+                arrays |= {k: z[k] for k in _SEVERAL}
             return SearchRun(str(z["source"]), int(z["seed"]), str(z["policy"]), str(z["variant"]),
                              stored_estimator_name(str(z["estimator"]), _naming(z)), arrays.pop("source_xy"),
                              bool(z["found"]),

@@ -74,12 +74,17 @@ class World:
     gas_type : str or None
         The gas the source emits (the truth, for the metrics only; the robot never reads it). None when the
         world has no e-nose.
+    extra_gas : tuple of FilamentModel
+        The filament models of the further sources of a world with several (:func:`make_world`'s
+        ``extra_sources``; empty: one source). They run on the same clock and wind as :attr:`gas`, and every
+        reading sees the sum of all plumes (:func:`make_world`, "Several sources").
     """
 
     def __init__(self, house: House, wind: WindSequence, gas: FilamentModel, *, camera: Camera,
                  detector: DetectorModel, gas_sensor: GasSensor, anemometer: Anemometer, source_object=None,
                  seed: int = 0, localisation: LocalisationError | None = None, source=None,
-                 source_detector: SourceDetector | None = None, enose=None, gas_type: str | None = None):
+                 source_detector: SourceDetector | None = None, enose=None, gas_type: str | None = None,
+                 extra_sources=()):
         self.house = house
         # the source as named (an object's centre or a given point); the gas may be released beside it, where the
         # emitting object meets the air (make_world's gas_obstacles)
@@ -125,6 +130,40 @@ class World:
         # the e-nose's own stream (a fixed spawn key): every other stream draws as without it
         self._rng_enose = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(0xE405,)))
         self._window_mean = None  # mean true concentration of the last gas-sensor window, ppm (for sniff)
+        # further sources: (FilamentModel, named point, emitting object, gas) each; none in a one-source world
+        self._extra = tuple(extra_sources)
+        for gas_i, _, _, g in self._extra:
+            if not isinstance(gas_i, FilamentModel) or gas_i.grid.shape != gas.grid.shape:
+                raise TypeError("extra_sources must hold FilamentModels on the house's grid")
+            if (enose is None) != (g is None) or (enose is not None and g not in enose.gases):
+                raise ValueError(f"each further source's gas must be one of the e-nose's gases "
+                                 f"{None if enose is None else enose.gases} (None without an e-nose), got {g!r}")
+        self._window_means = None  # per source, of the last window (several sources only)
+
+    @property
+    def extra_gas(self) -> tuple:
+        """The further sources' filament models (class docstring); empty in a one-source world."""
+        return tuple(e[0] for e in self._extra)
+
+    @property
+    def n_sources(self) -> int:
+        """How many sources emit (1 + the further ones)."""
+        return 1 + len(self._extra)
+
+    @property
+    def sources(self) -> np.ndarray:
+        """(n_sources, 2) every source's point, m, the first being :attr:`source` (the truth: scoring only)."""
+        return np.array([self.source] + [np.asarray(e[1], dtype=np.float64) for e in self._extra])
+
+    @property
+    def source_objects(self) -> tuple:
+        """Every source's emitting object (or None for a source in open space), in :attr:`sources`' order."""
+        return (self.source_object,) + tuple(e[2] for e in self._extra)
+
+    @property
+    def gas_types(self) -> tuple:
+        """Every source's gas, in :attr:`sources`' order (None entries: the world has no e-nose)."""
+        return (self.gas_type,) + tuple(e[3] for e in self._extra)
 
     @property
     def source(self) -> np.ndarray:
@@ -142,16 +181,21 @@ class World:
         return self.gas.params.dt
 
     def advance(self, seconds: float) -> None:
-        """Let gas and wind evolve for ``seconds`` (whole steps)."""
+        """Let gas and wind evolve for ``seconds`` (whole steps); every source's plume."""
         self.gas.run(seconds)
+        for e in self._extra:
+            e[0].run(seconds)
 
     def wind_now(self) -> WindField:
         """The wind snapshot in force."""
         return self.wind.at_time(self.time)
 
     def concentration(self, xy) -> np.ndarray:
-        """True concentration (ppm) at points (..., 2) now, without sensor effects."""
-        return self.gas.concentration(xy)
+        """True concentration (ppm) at points (..., 2) now, without sensor effects: the sum over the sources."""
+        c = self.gas.concentration(xy)
+        for e in self._extra:
+            c = c + e[0].concentration(xy)
+        return c
 
     def _offset_at(self, times) -> np.ndarray:
         """(..., 3) localisation offset e at ``times`` (s, world clock; the nearest step of ``dt``)."""
@@ -248,6 +292,10 @@ class World:
         if self._sensor_time is not None and self.time > self._sensor_time:
             state = sensor.idle(state, self.time - self._sensor_time, rng=self._rng_gas_sensor)
         samples = self.gas.sample(xy, n)  # the clock: one step per sample
+        if self._extra:  # the plumes add up (make_world, "Several sources"); each model steps with the clock
+            parts = [samples] + [e[0].sample(xy, n) for e in self._extra]
+            self._window_means = [float(np.mean(p)) for p in parts]
+            samples = np.sum(parts, axis=0)
         self._window_mean = float(np.mean(samples))
         reading = sensor.read(samples, dt, initial=state, rng=self._rng_gas_sensor)
         self._sensor_state, self._sensor_time = reading.state, self.time
@@ -256,12 +304,17 @@ class World:
     def sniff(self):
         """The electronic nose's classification of the last gas-sensor window (:meth:`sense_gas`): a
         :class:`psgsl_pgm.sim._enose.Smell` of the window's mean concentration at the sensor, the gas being the
-        source's. Draws from the e-nose's own stream only; the clock does not move."""
+        source's. With several sources the device answers the gas that brought most of the window's
+        concentration, at the total concentration (a mixture is classified as its dominant gas). Draws from the
+        e-nose's own stream only; the clock does not move."""
         if self.enose is None:
             raise ValueError("this world has no electronic nose: make it with make_world(enose=..., gas_type=...)")
         if self._window_mean is None:
             raise ValueError("sniff classifies the last gas reading: call sense_gas first")
-        return self.enose.classify(self._window_mean, self.gas_type, self._rng_enose)
+        gas = self.gas_type
+        if self._extra and self._window_means is not None:
+            gas = self.gas_types[int(np.argmax(self._window_means))]
+        return self.enose.classify(self._window_mean, gas, self._rng_enose)
 
     def sense_wind(self, xy) -> np.ndarray:
         """(2,) anemometer reading at ``xy`` now (the snapshot in force, plus noise).
@@ -407,8 +460,18 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
                gas_sensor=None, anemometer: Anemometer | None = None,
                wind: WindSequence | None = None, localisation: LocalisationError | None = None,
                gas_obstacles=None, source_detector: SourceDetector | None = None, enose=None,
-               gas_type: str | None = None) -> World:
+               gas_type: str | None = None, extra_sources=(), extra_gas_types=None) -> World:
     """Build the validation world and run the gas for ``warm_up`` seconds.
+
+    **Several sources** (``extra_sources``). The filament model is a passive-tracer model (Farrell et al. 2002,
+    Environ. Fluid Mech. 2:143–169; GADEN, Monroy et al. 2017, Sensors 17:1479): each filament is carried by the
+    wind and grows on its own, and the concentration at a point is the sum of the filaments' Gaussian puffs. The
+    gas is dilute (ppm), so it does not change the wind, and filaments never interact: the field of several
+    release points under one wind is exactly the sum of the single-source fields. The world therefore runs one
+    filament model per source, all in the same wind (the potential flow or the CFD solve of the realistic world)
+    on one clock, and every gas reading samples the sum. Each further source's filament noise has its own seed
+    (``SeedSequence([seed, 0x5EC0, i])``), so the first source's plume, and every other stream, draw the same
+    numbers as in a one-source world.
 
     Parameters
     ----------
@@ -451,6 +514,11 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         from its own random stream.
     gas_type : str, optional, keyword-only
         The source's gas, one of ``enose.gases``; required with ``enose`` (and only with it).
+    extra_sources : sequence, keyword-only
+        Further sources that emit at the same time, each given as ``source`` is (at most 2: a world has 1–3
+        sources); default none.
+    extra_gas_types : sequence of str, optional, keyword-only
+        With ``enose``: each further source's gas (default: ``gas_type`` for all); without: None.
 
     Returns
     -------
@@ -482,6 +550,7 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
     if gas_obstacles is not None:
         gas_grid, release = _blocked_for_gas(house, gas_obstacles, source)
     gas = FilamentModel(gas_grid, wind, release, params=params, outlet=house.outlet, seed=gas_seed)
+    extra = _extra_sources(house, extra_sources, extra_gas_types, gas_type, wind, params, gas_obstacles, seed)
     if gas_sensor is not None and not isinstance(gas_sensor, (GasSensor, MOXSensor, PIDSensor)):
         raise TypeError(f"gas_sensor must be a GasSensor, MOXSensor or PIDSensor, got {type(gas_sensor).__name__}")
     world = World(
@@ -497,6 +566,36 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
         source_detector=source_detector,
         enose=enose,
         gas_type=gas_type,
+        extra_sources=extra,
     )
     world.advance(warm_up)
     return world
+
+
+#: Most further sources a world holds (1–3 sources in all).
+MAX_EXTRA_SOURCES = 2
+
+
+def _extra_sources(house, extra_sources, extra_gas_types, gas_type, wind, params, gas_obstacles, seed) -> tuple:
+    """(FilamentModel, named point, emitting object, gas) of each further source (make_world's docstring)."""
+    if isinstance(extra_sources, (str, bytes)) or not hasattr(extra_sources, "__len__"):
+        raise TypeError(f"extra_sources must be a sequence of sources (class names, objects or (x, y)), got "
+                        f"{extra_sources!r}")
+    if len(extra_sources) > MAX_EXTRA_SOURCES:
+        raise ValueError(f"extra_sources must hold at most {MAX_EXTRA_SOURCES} sources (1-3 in all), got "
+                         f"{len(extra_sources)}")
+    if extra_gas_types is None:
+        extra_gas_types = [gas_type] * len(extra_sources)
+    elif gas_type is None or len(extra_gas_types) != len(extra_sources):
+        raise ValueError(f"extra_gas_types must give one gas per further source ({len(extra_sources)}) with an "
+                         f"e-nose's gas_type, got {extra_gas_types!r} (gas_type={gas_type!r})")
+    out = []
+    for i, (spec, g) in enumerate(zip(extra_sources, extra_gas_types)):
+        xy, obj = _source(house, spec)
+        gas_grid, release = house.grid, xy
+        if gas_obstacles is not None:
+            gas_grid, release = _blocked_for_gas(house, gas_obstacles, xy)
+        s = int(np.random.SeedSequence([int(seed), 0x5EC0, i]).generate_state(1)[0])
+        model = FilamentModel(gas_grid, wind, release, params=params, outlet=house.outlet, seed=s)
+        out.append((model, np.asarray(xy, dtype=np.float64).copy(), obj, None if g is None else str(g)))
+    return tuple(out)

@@ -248,10 +248,10 @@ class WorldSpec:
         wm = WorldModel.parse(self.model if model is None else model)
         house = self.house(seed)
         spec = self.source_spec(source)
-        if self.fixed_house is not None or not isinstance(spec, str):
-            # object classes may be lumped into "other": resolve here, to the emitting object when there is one
-            xy, obj = self.source_target(spec, house)
-            spec = obj if isinstance(spec, str) else xy  # a position stays where it is (make_world finds its object)
+        spec = self._resolve_source(spec, house)
+        if kwargs.get("extra_sources"):  # several sources: each resolved as the first
+            kwargs["extra_sources"] = [self._resolve_source(self.source_spec(x), house)
+                                       for x in kwargs["extra_sources"]]
         if self.wind["kind"] == "gaden":
             kwargs.setdefault("wind", self.wind["sequence"])
             wm = WorldModel(tuple(c for c in wm.components if c != "cfd-wind"))  # the file's CFD is the CFD wind
@@ -261,6 +261,13 @@ class WorldSpec:
             kwargs.setdefault("mean_speed", self.wind["speed"])
             kwargs.setdefault("perturbation", self.wind["perturbation"])
         return make_world(house, source=spec, seed=int(seed), warm_up=warm_up, **kwargs)
+
+    def _resolve_source(self, spec, house: House):
+        if self.fixed_house is not None or not isinstance(spec, str):
+            # object classes may be lumped into "other": resolve here, to the emitting object when there is one
+            xy, obj = self.source_target(spec, house)
+            spec = obj if isinstance(spec, str) else xy  # a position stays where it is (make_world finds its object)
+        return spec
 
     def windows_of(self, house: House) -> tuple:
         """The windows: as declared, or (built-in house) each window mask's extent as a segment."""
