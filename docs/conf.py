@@ -45,6 +45,9 @@ extensions = [
     "numpydoc",
     "myst_nb",
     "sphinx_gallery.gen_gallery",
+    # names in code (notebook cells, guides' snippets, gallery examples) link to their API pages, and each API
+    # page lists the pages whose code uses it ("examples using X")
+    "sphinx_codeautolink",
 ]
 
 # ---------------------------------------------------------------- sources
@@ -353,8 +356,21 @@ def _notebook_links(app, doctree):
             node["reftarget"] = "teaching/notebooks/" + target[len(real) + 1:]
 
 
+# ---------------------------------------------------------------- code links (sphinx-codeautolink)
+codeautolink_concat_default = True  # a page's code blocks run in order: an import in one cell names the next ones
+codeautolink_autodoc_inject = True  # every API page ends with the pages whose code uses it
+codeautolink_global_preface = "import psgsl_pgm"
+
+
+def _gallery_links_by_gallery(app, docname, source):
+    """The gallery's pages keep sphinx-gallery's own code links (it ran the code); codeautolink skips them."""
+    if docname.startswith("auto_examples/"):
+        source[0] = ".. autolink-skip:: file\n\n" + source[0]
+
+
 def setup(app):
     app.connect("doctree-read", _notebook_links)
     app.connect("autodoc-process-docstring", _constant_doc)
     app.connect("autodoc-process-docstring", _link_equations)
     app.connect("missing-reference", _missing_reference)
+    app.connect("source-read", _gallery_links_by_gallery)

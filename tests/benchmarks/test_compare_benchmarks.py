@@ -50,3 +50,23 @@ def test_mismatched_folders_are_refused(tmp_path, script, capsys):
         script.compare(tmp_path / "A", tmp_path / "A", arm="nearest-object/semantics+rooms")
     assert script.main([str(tmp_path / "nowhere"), str(tmp_path / "A")]) == 2
     assert "not a benchmark folder" in capsys.readouterr().err
+
+
+def test_two_arms_of_one_folder_and_the_time_to_every_source(tmp_path, monkeypatch):
+    import psgsl_pgm.search._bench_report as report
+
+    rows = _rows([100.0, 200.0, 300.0, 400.0]) + _rows([150.0, 150.0, 350.0, 1000.0], arm="infotaxis/olfaction")
+    for i, r in enumerate(rows):
+        r["several"] = {"t_all": r["t"] + 10 * i, "all": r["t"] < 1000}
+    monkeypatch.setattr(report, "_table", lambda folder, settings: rows)
+    script = load_script("compare_benchmarks")
+    d = _folder(tmp_path, "A")
+    r = script.compare(d, d, arm_b="infotaxis/olfaction")
+    assert r["difference"]["value"] == pytest.approx(250.0 - 412.5)
+    assert r["faster_slower_equal"] == [3, 1, 0]
+    r = script.compare(d, d, arm_b="infotaxis/olfaction", time="all")
+    assert r["rmst"]["A"] == pytest.approx(250.0 + 15.0) and r["rmst"]["B"] == pytest.approx(412.5 + 55.0)
+    for x in rows:
+        del x["several"]
+    with pytest.raises(ValueError, match="needs a several-source benchmark"):
+        script.compare(d, d, arm_b="infotaxis/olfaction", time="all")
