@@ -64,7 +64,7 @@ def _episode_rows(args, kw, n_runs, unit):
     """Print the real-time factor of one never-found episode (best and median wall time, best CPU time over
     ``n_runs``) and the split of one more run into its parts."""
     from psgsl_pgm.experiment._step import VariantPosteriors
-    from psgsl_pgm.search import _loop, run_closed_loop
+    from psgsl_pgm.search import _stepper, run_closed_loop
     from psgsl_pgm.sim import World, _filaments
 
     walls, cpus = [], []
@@ -85,7 +85,7 @@ def _episode_rows(args, kw, n_runs, unit):
              ("camera frames", World, "camera_frame"),
              ("belief updates", VariantPosteriors, "observe"),
              ("posteriors", VariantPosteriors, "posteriors"),
-             ("decisions", _loop, "choose"))
+             ("decisions", _stepper, "choose"))
     spent = {label: 0.0 for label, _, _ in parts}
     saved = [(owner, name, getattr(owner, name)) for _, owner, name in parts]
 
@@ -221,7 +221,7 @@ def _space_aware_homes(a):
     """Space-aware infotaxis decisions in the embedded house and in large generated homes (module docstring)."""
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors, visit
-    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, _space, run_closed_loop
+    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _space, _stepper, run_closed_loop
     from psgsl_pgm.search._choose import choose
     from psgsl_pgm.sim import default_world
     from psgsl_pgm.sim._generate import generate_house
@@ -274,8 +274,8 @@ def _space_aware_homes(a):
             finally:
                 spent.append(time.perf_counter() - t0)
 
-        saved = _loop.choose
-        _loop.choose = timed
+        saved = _stepper.choose
+        _stepper.choose = timed
         _space._SHARED_VIEWS.clear()  # the first episode in this home
         try:
             t0 = time.perf_counter()
@@ -284,7 +284,7 @@ def _space_aware_homes(a):
                             search=SearchConfig(found_radius=1e-3, time_budget=a.home_budget))
             wall = time.perf_counter() - t0
         finally:
-            _loop.choose = saved
+            _stepper.choose = saved
         print(f"space-aware, {name}, grid {world.house.shape}, {n_cand} candidate positions: decision warm "
               f"{min(warm):.2f} ms (best of {len(warm)}), cold {min(colds):.0f} ms (best of 3); a {a.home_budget:.0f}-s "
               f"episode: {len(spent)} decisions, mean {1e3 * np.mean(spent):.1f} ms, {sum(spent):.2f} s of its "
