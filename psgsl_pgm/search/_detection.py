@@ -48,6 +48,7 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse as sp
 
+from .._shared._memo import content_digest
 from .._shared._validate import bool_mask, positive, unit_interval
 
 __all__ = ["DetectionModel"]
@@ -124,6 +125,20 @@ class DetectionModel:
         self._offsets = np.stack([dr.ravel(), dc.ravel()], axis=1)
         self._rows_cache: dict = {}
         self._paths: OrderedDict = OrderedDict()  # path points -> the hypotheses found along it (_found_along)
+
+    @property
+    def content_key(self) -> str:
+        """A digest of what decides which hypotheses a point finds: the grid's frame, the found radius and the
+        footprints (not the miss probability); equal models of equal houses have equal keys (a free space's
+        finder cells and findable masks are cached under it, :class:`psgsl_pgm.search.FreeSpace`)."""
+        key = self.__dict__.get("_content_key")
+        if key is None:
+            fp = np.packbits(np.stack(self.footprints)) if self.footprints else np.empty(0, np.uint8)
+            key = self._content_key = content_digest(
+                self.shape, float(self.grid.resolution),
+                tuple(np.asarray(self.grid.origin, dtype=np.float64).ravel().tolist()), float(self.found_radius),
+                len(self.footprints), fp)
+        return key
 
     @classmethod
     def from_house(cls, house, found_radius: float, *, miss_probability: float = 0.0) -> "DetectionModel":

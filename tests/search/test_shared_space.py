@@ -1,0 +1,66 @@
+"""What a worker computes once per house: a shared free space, tour and potential flow give a run the very numbers
+a fresh one gives (keyed by content, not by object), and other content gets its own entry."""
+
+import numpy as np
+import pytest
+
+from psgsl_pgm.experiment._tour import exploration_tour, shared_tour
+from psgsl_pgm.search import DetectionModel
+from psgsl_pgm.search._space import _SHARED_SPACES, FreeSpace
+from psgsl_pgm.sim import Camera, default_house, potential_flow
+from psgsl_pgm.sim import _wind
+
+
+def test_a_shared_space_is_one_per_content_and_equals_a_new_one():
+    _SHARED_SPACES.clear()
+    a, b = default_house(0), default_house(0)  # equal content, two objects
+    assert a is not b
+    space = FreeSpace.shared(a, Camera())
+    assert FreeSpace.shared(b, Camera()) is space
+    assert FreeSpace.shared(a, Camera(), clearance=0.3) is not space  # other options, another space
+    fresh = FreeSpace(b, Camera())
+    for radius in (0.5, 0.36, 0.5):  # a shared space moves between radii as runs of both come
+        det = DetectionModel.from_house(b, radius)
+        np.testing.assert_array_equal(space.cover(det), fresh.cover(det))
+        np.testing.assert_array_equal(space.lattice, fresh.lattice)
+        cell = space.snap((3.0, 6.0))
+        np.testing.assert_array_equal(space.findable(det, cell), fresh.findable(det, cell))
+        np.testing.assert_array_equal(space.distances(cell), fresh.distances(cell))
+
+
+def test_detection_content_key_names_the_footprints_and_radius():
+    h = default_house(0)
+    k = DetectionModel.from_house(h, 0.5).content_key
+    assert DetectionModel.from_house(default_house(0), 0.5).content_key == k
+    assert DetectionModel.from_house(h, 0.5, miss_probability=0.2).content_key == k  # misses do not move finders
+    assert DetectionModel.from_house(h, 0.4).content_key != k
+    assert DetectionModel(h.grid, 0.5).content_key != k  # no footprints
+
+
+def test_a_shared_tour_is_the_tour_read_only():
+    h = default_house(0)
+    got, ref = shared_tour(h, start=(0.8, 6.0)), exploration_tour(h, start=(0.8, 6.0))
+    assert shared_tour(default_house(0), start=(0.8, 6.0)) is got
+    for x, y in ((got.stops, ref.stops), (got.path, ref.path), (got.distance, ref.distance),
+                 (got.waypoint, ref.waypoint), (got.path_index, ref.path_index)):
+        np.testing.assert_array_equal(x, y)
+        assert not x.flags.writeable
+    assert all(np.array_equal(x, y) for x, y in zip(got.headings, ref.headings))
+    assert shared_tour(h, start=(3.0, 6.0)) is not got
+    with pytest.raises(ValueError, match="clearance must be a positive number"):
+        shared_tour(h, clearance=-1.0)
+
+
+def test_the_cached_potential_flow_is_the_computed_one_bit_for_bit():
+    h = default_house(0)
+    _wind._UNSCALED_FLOWS.clear()
+    first = potential_flow(h.grid, h.inlet, h.outlet, mean_speed=0.2)
+    again = potential_flow(h.grid, h.inlet, h.outlet, mean_speed=0.2)  # from the cache
+    assert len(_wind._UNSCALED_FLOWS) == 1
+    for x, y in ((first.velocity, again.velocity), (first.u_faces, again.u_faces), (first.v_faces, again.v_faces)):
+        np.testing.assert_array_equal(x, y)
+    unit = potential_flow(h.grid, h.inlet, h.outlet, mean_speed=1.0)
+    _wind._UNSCALED_FLOWS.clear()
+    np.testing.assert_array_equal(unit.velocity, potential_flow(h.grid, h.inlet, h.outlet, mean_speed=1.0).velocity)
+    with pytest.raises(ValueError, match="mean_speed must be a positive number"):
+        potential_flow(h.grid, h.inlet, h.outlet, mean_speed=0.0)
