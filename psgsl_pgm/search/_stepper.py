@@ -152,7 +152,7 @@ class ClosedLoopEpisode:
         else:
             robot_m = 0.0
         self.robot_m = robot_m
-        detection = DetectionModel.from_house(house, r, miss_probability=robot_m)
+        detection = DetectionModel.shared(house, r, miss_probability=robot_m)
         self.truth_hypothesis = detection.source_cell(truth, world.source_object, house)
         self.truth_region = (detection.centres[detection.region_mask(self.truth_hypothesis).ravel()]
                              if world.source_object is not None else None)  # the scoring's footprint of an object
