@@ -112,7 +112,8 @@ def _part_seconds(stats: pstats.Stats) -> dict:
 
 
 def _compile_cost(policy: str, variant: str) -> tuple:
-    """Wall seconds of a 20-s episode in a fresh process with an empty numba cache and with it filled."""
+    """(wall s, CPU s of the child) of a 20-s episode in a fresh process with an empty numba cache, then with it
+    filled."""
     code = ("import time; t = time.perf_counter(); from psgsl_pgm.search import SearchConfig, run_closed_loop; "
             f"run_closed_loop('oven', 0, {policy!r}, {variant!r}, search=SearchConfig(time_budget=20.0)); "
             "print(time.perf_counter() - t, time.process_time())")
@@ -214,8 +215,8 @@ def main(argv=None):
     if not a.no_compile:
         (cold, cold_cpu), (warm, warm_cpu) = _compile_cost(a.policy, a.variant)
         print(f"\nfirst compile: a 20-s episode in a fresh process, empty numba cache {cold:.1f} s wall "
-              f"({cold_cpu:.1f} s CPU), cache filled {warm:.1f} s ({warm_cpu:.1f} s CPU): {cold - warm:.1f} s of "
-              "compilation, paid once per machine (numba's cache=True)")
+              f"({cold_cpu:.1f} s CPU), cache filled {warm:.1f} s ({warm_cpu:.1f} s CPU): {cold_cpu - warm_cpu:.1f} s of "
+              "CPU compiling, paid once per machine (numba's cache=True)")
 
 
 if __name__ == "__main__":
