@@ -83,7 +83,8 @@ def machine() -> str:
         from threadpoolctl import threadpool_info
 
         blas = "; ".join(f"{d.get('internal_api')} {d.get('version')} {d.get('architecture')} "
-                         f"({d.get('num_threads')} thread(s))" for d in threadpool_info() if d.get("user_api") == "blas")
+                         f"({d.get('num_threads')} thread(s))"
+                         for d in threadpool_info() if d.get("user_api") == "blas")
     except ImportError:
         blas = "threadpoolctl not installed"
     return f"CPU: {cpu}\nBLAS: {blas}"
@@ -215,8 +216,8 @@ def main(argv=None):
     if not a.no_compile:
         (cold, cold_cpu), (warm, warm_cpu) = _compile_cost(a.policy, a.variant)
         print(f"\nfirst compile: a 20-s episode in a fresh process, empty numba cache {cold:.1f} s wall "
-              f"({cold_cpu:.1f} s CPU), cache filled {warm:.1f} s ({warm_cpu:.1f} s CPU): {cold_cpu - warm_cpu:.1f} s of "
-              "CPU compiling, paid once per machine (numba's cache=True)")
+              f"({cold_cpu:.1f} s CPU), cache filled {warm:.1f} s ({warm_cpu:.1f} s CPU): "
+              f"{cold_cpu - warm_cpu:.1f} s of CPU compiling, paid once per machine (numba's cache=True)")
 
 
 if __name__ == "__main__":
