@@ -96,3 +96,21 @@ def test_the_default_house_and_world_are_built_once():
     assert default_world() is default_world()
     with pytest.raises(TypeError, match="seed must be an integer"):
         default_house(1.5)
+
+
+def test_the_arms_of_an_episode_share_the_plume_model_of_the_first_wind_reading():
+    from psgsl_pgm.experiment import _step
+    from psgsl_pgm.search import SearchConfig
+    from psgsl_pgm.search._stepper import ClosedLoopEpisode
+
+    _step._FIRST_PLUMES.clear()
+    models = []
+    for policy, variant in (("infotaxis", "olfaction"), ("greedy", "semantics+rooms")):
+        ep = ClosedLoopEpisode("oven", 3, policy, variant, search=SearchConfig(time_budget=30.0))
+        ep.take(ep.first_move())  # the look-around at the start: one wind reading
+        assert ep.beliefs.wind.n_readings == 1
+        models.append(ep.beliefs.model)
+    assert models[0] is models[1]
+    other = ClosedLoopEpisode("oven", 4, "infotaxis", "olfaction", search=SearchConfig(time_budget=30.0))
+    other.take(other.first_move())  # another seed: another wind, another model
+    assert other.beliefs.model is not models[0]
