@@ -6,9 +6,10 @@ pieces the way the benchmark does, in one process, and times each:
 * **preparation** (the parent, once per house): the house generation (:func:`psgsl_pgm.sim.generate_house` and its
   world file), loading the world file, findability (:func:`psgsl_pgm.search._episodes.findable_sources`) and the
   episode draws;
-* **runs** (a worker, :func:`psgsl_pgm.search._benchmark.benchmark_episode`): ``--seeds`` episodes of one
-  policy/variant in the same house, in a row, as the worker of a grid takes them (the first pays for what the
-  later ones may find cached). Each run's wall and CPU time (``time.process_time``), then its parts, measured
+* **runs** (a worker, :func:`psgsl_pgm.search._benchmark.benchmark_episode`): ``--seeds`` episodes in the same
+  house, each run by every arm of ``--policies`` × ``--variants`` (the benchmark's arms: the tour with the first
+  variant only), in a row, as the worker of a grid takes them (the first pays for what the later ones may find
+  cached). Each run's wall and CPU time (``time.process_time``), then its parts, measured
   again under cProfile with a CPU clock: the world's construction and in it the wind solve, the free space (its
   drivable cells), the geodesic costs (Dijkstra from a cell), the far lattice, the cover of the finder cells and
   the findable mask, the camera frames and gas readings of the stops, the estimator update, the posteriors (the
@@ -21,8 +22,8 @@ pieces the way the benchmark does, in one process, and times each:
 * the cProfile's top functions by own time (``--top``), and the whole profile written to ``--pstats``.
 
 The output names the CPU (``lscpu``) and the BLAS kernel (threadpoolctl). The BLAS is limited to one thread, as in
-the grid's workers. Run: ``python benchmarks/profile_benchmark_run.py [--house 0] [--seeds 3] [--policy infotaxis]
-[--variant semantics+rooms] [--budget 1000] [--world-model ideal] [--top 30] [--pstats run.pstats]
+the grid's workers. Run: ``python benchmarks/profile_benchmark_run.py [--house 0] [--seeds 3] [--policies infotaxis]
+[--variants semantics+rooms] [--budget 1000] [--world-model ideal] [--top 30] [--pstats run.pstats]
 [--no-compile]``, one core: ``taskset -c 0 nice python benchmarks/profile_benchmark_run.py``.
 """
 
@@ -131,8 +132,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--house", type=int, default=0, help="generated home (dev split seed)")
     ap.add_argument("--seeds", type=int, default=3, help="episodes run in a row in the house")
-    ap.add_argument("--policy", default="infotaxis")
-    ap.add_argument("--variant", default="semantics+rooms")
+    ap.add_argument("--policies", nargs="+", default=["infotaxis"])
+    ap.add_argument("--variants", nargs="+", default=["semantics+rooms"])
     ap.add_argument("--budget", type=float, default=1000.0, help="time budget per run, s of simulated time")
     ap.add_argument("--world-model", default="ideal")
     ap.add_argument("--top", type=int, default=30)
@@ -163,10 +164,13 @@ def main(argv=None):
         path, w_write, c_write = _timed(gen.write, out / f"h{a.house:05d}", gas="smoke")
         spec, w_load, c_load = _timed(load_world, path)
         found, w_find, c_find = _timed(findable_sources, spec, found_radius=search.found_radius)
+        from psgsl_pgm.search._benchmark import benchmark_arms
+
+        arms = benchmark_arms(a.policies, a.variants, "right-ontology")
         episodes, w_draw, c_draw = _timed(lambda: [draw_episode(spec, a.house, s, gases=("smoke",), off_rate=0.1,
                                                                 sources=found) for s in range(a.seeds)])
         print(f"\nhouse {a.house}: grid {spec.house().shape}, {gen.n_rooms} rooms, {gen.area:.0f} m²; world model "
-              f"{a.world_model}; {a.policy}/{a.variant}, budget {a.budget:.0f} s")
+              f"{a.world_model}; arms {', '.join(f'{p}/{v}' for p, v in arms)}, budget {a.budget:.0f} s")
         print("preparation (the parent, once per house)            wall s    CPU s")
         for label, w, c in (("house generation", w_gen, c_gen), ("world file written", w_write, c_write),
                             ("world file loaded", w_load, c_load), ("findability", w_find, c_find),
@@ -174,20 +178,21 @@ def main(argv=None):
             print(f"  {label:<50}{w:7.3f}  {c:7.3f}")
         wdig = digest(world_key(path))
 
-        def job(s):
+        def job(s, policy, variant):
             ep = episodes[s]
-            return benchmark_episode(tuple(ep["xy"]), s, a.policy, a.variant, "infotaxis", world=str(path),
+            return benchmark_episode(tuple(ep["xy"]), s, policy, variant, "infotaxis", world=str(path),
                                      world_digest=wdig, config=replace(config, gas=ep["gas"]), search=search,
                                      label={"house": path.parent.name, "condition": "right-ontology", "episode": ep})
 
         print("\nruns, one after another in this process (as a grid worker takes them)")
         cpus = []
         for s in range(a.seeds):
-            run, w, c = _timed(job, s)
-            cpus.append(c)
-            print(f"  seed {s}: {run.time_to_find:7.1f} s simulated, {run.n_steps:3d} stops, found {run.found!s:5}, "
-                  f"declared {run.declared!s:5}: wall {w:6.3f} s, CPU {c:6.3f} s "
-                  f"({run.time_to_find / max(c, 1e-9):,.0f}x real time per CPU s)")
+            for policy, variant in arms:
+                run, w, c = _timed(job, s, policy, variant)
+                cpus.append(c)
+                print(f"  seed {s} {policy}/{variant}: {run.time_to_find:7.1f} s simulated, {run.n_steps:3d} stops, "
+                      f"found {run.found!s:5}, declared {run.declared!s:5}: wall {w:6.3f} s, CPU {c:6.3f} s "
+                      f"({run.time_to_find / max(c, 1e-9):,.0f}x real time per CPU s)")
         print(f"  CPU per run: median {statistics.median(cpus):.3f} s, first {cpus[0]:.3f} s, "
               f"later median {statistics.median(cpus[1:]) if len(cpus) > 1 else float('nan'):.3f} s")
 
@@ -195,13 +200,14 @@ def main(argv=None):
         c0 = time.process_time()
         prof.enable()
         for s in range(a.seeds):
-            job(s)
+            for policy, variant in arms:
+                job(s, policy, variant)
         prof.disable()
         profiled = time.process_time() - c0
         stats = pstats.Stats(prof)
         parts = _part_seconds(stats)
         plain = sum(cpus)
-        print(f"\nparts of the same {a.seeds} runs under cProfile (CPU clock; {profiled:.3f} s profiled, "
+        print(f"\nparts of the same {len(cpus)} runs under cProfile (CPU clock; {profiled:.3f} s profiled, "
               f"{plain:.3f} s without the profiler, run again after the above: caches warm)")
         print(f"  {'part':<46}{'profiled CPU s':>15}{'share':>8}{'≈ CPU s':>10}")
         for label, depth, _ in PARTS:
@@ -214,7 +220,7 @@ def main(argv=None):
         print(f"\ntop {a.top} functions by own CPU time (profiled):")
         print("\n".join(line for line in buf.getvalue().splitlines()[6:] if line.strip()))
     if not a.no_compile:
-        (cold, cold_cpu), (warm, warm_cpu) = _compile_cost(a.policy, a.variant)
+        (cold, cold_cpu), (warm, warm_cpu) = _compile_cost(*arms[0])
         print(f"\nfirst compile: a 20-s episode in a fresh process, empty numba cache {cold:.1f} s wall "
               f"({cold_cpu:.1f} s CPU), cache filled {warm:.1f} s ({warm_cpu:.1f} s CPU): "
               f"{cold_cpu - warm_cpu:.1f} s of CPU compiling, paid once per machine (numba's cache=True)")
