@@ -85,7 +85,9 @@ def _episode_rows(args, kw, n_runs, unit):
         c0 = time.process_time()
         run_closed_loop(*args, **kw)
         cold.append(time.process_time() - c0)
-    print(f"  the same with the per-house caches emptied before each run (the first run of a house in a worker): "
+    print(f"  the same with the per-house caches emptied before each run (the first run of a house in a worker; "
+          f"the repeated runs above also share the plume model of their first wind reading, as the arms of one "
+          f"episode do): "
           f"median CPU {statistics.median(cold):.3f} s ({run.time_to_find / statistics.median(cold):,.0f}x)")
     # the episode's parts (none calls another), timed by wrapping them; the rest is the loop itself,
     # credible regions, metrics, the "not found" update, the world's construction
@@ -122,13 +124,14 @@ def _episode_rows(args, kw, n_runs, unit):
 
 def _clear_house_caches():
     """Empty what a process keeps per house content (the shared free spaces, views, detection models, tours,
-    potential flows, the embedded world and houses); a prepared ``space`` passed to a run keeps its own."""
-    from psgsl_pgm.experiment import _tour
+    potential flows, the plume models of a first wind reading, the embedded world and houses); a prepared
+    ``space`` passed to a run keeps its own."""
+    from psgsl_pgm.experiment import _step, _tour
     from psgsl_pgm.search import _detection, _space
     from psgsl_pgm.sim import _house, _wind, _worldfile
 
     for cache in (_space._SHARED_SPACES, _space._SHARED_VIEWS, _detection._SHARED_MODELS, _tour._SHARED_TOURS,
-                  _wind._UNSCALED_FLOWS, _worldfile._DEFAULT_WORLDS):
+                  _wind._UNSCALED_FLOWS, _worldfile._DEFAULT_WORLDS, _step._FIRST_PLUMES):
         cache.clear()
     _house._default_house.cache_clear()
 
