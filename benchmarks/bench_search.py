@@ -64,7 +64,7 @@ def _episode_rows(args, kw, n_runs, unit):
     """Print the real-time factor of one never-found episode (best and median wall time, best CPU time over
     ``n_runs``) and the split of one more run into its parts."""
     from psgsl_pgm.experiment._step import VariantPosteriors
-    from psgsl_pgm.search import _loop, run_closed_loop
+    from psgsl_pgm.search import _stepper, run_closed_loop
     from psgsl_pgm.sim import World, _filaments
 
     walls, cpus = [], []
@@ -76,8 +76,19 @@ def _episode_rows(args, kw, n_runs, unit):
     best, median, cpu = min(walls), statistics.median(walls), min(cpus)
     print(f"one {run.time_to_find:.0f}-s {args[2]}/{args[3]} episode ({run.n_steps} stops), {len(walls)} runs: "
           f"best {best:.3f} s ({run.time_to_find / best:,.0f}x real time), median {median:.3f} s "
-          f"({run.time_to_find / median:,.0f}x real time), best CPU {cpu:.3f} s ({run.time_to_find / cpu:,.0f}x); "
+          f"({run.time_to_find / median:,.0f}x real time), best CPU {cpu:.3f} s ({run.time_to_find / cpu:,.0f}x), "
+          f"median CPU {statistics.median(cpus):.3f} s ({run.time_to_find / statistics.median(cpus):,.0f}x); "
           f"{best / unit * 1e3:,.0f} semantic terms")
+    cold = []
+    for _ in range(max(1, n_runs)):  # the first run of a house in a process: its per-house caches empty
+        _clear_house_caches()
+        c0 = time.process_time()
+        run_closed_loop(*args, **kw)
+        cold.append(time.process_time() - c0)
+    print(f"  the same with the per-house caches emptied before each run (the first run of a house in a worker; "
+          f"the repeated runs above also share the plume model of their first wind reading, as the arms of one "
+          f"episode do): "
+          f"median CPU {statistics.median(cold):.3f} s ({run.time_to_find / statistics.median(cold):,.0f}x)")
     # the episode's parts (none calls another), timed by wrapping them; the rest is the loop itself,
     # credible regions, metrics, the "not found" update, the world's construction
     parts = (("gas simulation", _filaments.FilamentModel, "step"),
@@ -85,7 +96,7 @@ def _episode_rows(args, kw, n_runs, unit):
              ("camera frames", World, "camera_frame"),
              ("belief updates", VariantPosteriors, "observe"),
              ("posteriors", VariantPosteriors, "posteriors"),
-             ("decisions", _loop, "choose"))
+             ("decisions", _stepper, "choose"))
     spent = {label: 0.0 for label, _, _ in parts}
     saved = [(owner, name, getattr(owner, name)) for _, owner, name in parts]
 
@@ -109,6 +120,20 @@ def _episode_rows(args, kw, n_runs, unit):
             setattr(owner, name, fn)
     split = ", ".join(f"{label} {t / wall:.0%}" for label, t in spent.items())
     print(f"  split of one run ({wall:.3f} s): {split}, the rest {1 - sum(spent.values()) / wall:.0%}")
+
+
+def _clear_house_caches():
+    """Empty what a process keeps per house content (the shared free spaces, views, detection models, tours,
+    potential flows, the plume models of a first wind reading, the embedded world and houses); a prepared
+    ``space`` passed to a run keeps its own."""
+    from psgsl_pgm.experiment import _step, _tour
+    from psgsl_pgm.search import _detection, _space
+    from psgsl_pgm.sim import _house, _wind, _worldfile
+
+    for cache in (_space._SHARED_SPACES, _space._SHARED_VIEWS, _detection._SHARED_MODELS, _tour._SHARED_TOURS,
+                  _wind._UNSCALED_FLOWS, _worldfile._DEFAULT_WORLDS, _step._FIRST_PLUMES):
+        cache.clear()
+    _house._default_house.cache_clear()
 
 
 def main(argv=None):
@@ -221,7 +246,7 @@ def _space_aware_homes(a):
     """Space-aware infotaxis decisions in the embedded house and in large generated homes (module docstring)."""
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.experiment._step import VariantPosteriors, visit
-    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _loop, _space, run_closed_loop
+    from psgsl_pgm.search import DetectionModel, FreeSpace, SearchConfig, Situation, _space, _stepper, run_closed_loop
     from psgsl_pgm.search._choose import choose
     from psgsl_pgm.sim import default_world
     from psgsl_pgm.sim._generate import generate_house
@@ -255,6 +280,7 @@ def _space_aware_homes(a):
         colds = []
         for _ in range(3):  # cold: a fresh geometry (Dijkstra, views) and run cache (Green's rows), best of 3
             _space._SHARED_VIEWS.clear()  # the views a process keeps per map
+            _space._SHARED_SPACES.clear()
             sit = situation(FreeSpace(world.house, world.camera), {})
             t0 = time.perf_counter()
             choose("space-aware-infotaxis", sit)
@@ -274,9 +300,10 @@ def _space_aware_homes(a):
             finally:
                 spent.append(time.perf_counter() - t0)
 
-        saved = _loop.choose
-        _loop.choose = timed
+        saved = _stepper.choose
+        _stepper.choose = timed
         _space._SHARED_VIEWS.clear()  # the first episode in this home
+        _space._SHARED_SPACES.clear()
         try:
             t0 = time.perf_counter()
             run_closed_loop(source, 0, "space-aware-infotaxis", "semantics+rooms",
@@ -284,7 +311,7 @@ def _space_aware_homes(a):
                             search=SearchConfig(found_radius=1e-3, time_budget=a.home_budget))
             wall = time.perf_counter() - t0
         finally:
-            _loop.choose = saved
+            _stepper.choose = saved
         print(f"space-aware, {name}, grid {world.house.shape}, {n_cand} candidate positions: decision warm "
               f"{min(warm):.2f} ms (best of {len(warm)}), cold {min(colds):.0f} ms (best of 3); a {a.home_budget:.0f}-s "
               f"episode: {len(spent)} decisions, mean {1e3 * np.mean(spent):.1f} ms, {sum(spent):.2f} s of its "

@@ -20,6 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .._shared._memo import ContentCache, content_digest
 from ..core._beliefs import room_evidence, update_class_probs
 from ..core._class_beliefs import ClassBeliefMap
 from ..core._fusion import fuse
@@ -32,6 +33,13 @@ from ._config import ESTIMATORS, UNKNOWN_GAS, VARIANTS, ExperimentConfig, parse_
 from ._robot_models import robot_detector_model, robot_gas_confusion, robot_hit_rule, wind_basis
 
 __all__ = ["VariantPosteriors", "make_estimator", "robot_hit_rule", "semantic_terms", "start_run", "visit"]
+
+#: The plume models solved at the first wind reading, shared by the runs of a process, keyed by their content:
+#: every policy, variant and condition of an episode starts with the same look-around at the same start, so
+#: they read the same wind and solve the same model, and its hit rows are the same column by column (the
+#: transposed sparse solve takes one right-hand side at a time). Two are kept (each holds its LU factors and up
+#: to 512 rows).
+_FIRST_PLUMES = ContentCache(maxsize=2)
 
 
 def start_run(source, seed, estimator, config, *, world=None, world_spec=None, gas_type=None, extra_sources=(),
@@ -309,9 +317,19 @@ class VariantPosteriors:
         """The plume model with the mean wind Σ a_k φ_k of ``coefficients`` (one sparse LU factorisation)."""
         self.n_wind_solves += 1
         cfg = self._config
-        return PlumeModel.from_grid_map(self.wind.grid, self.wind.field(coefficients), outlets=self._outlets,
-                                        diffusivity=cfg.diffusivity, lifetime=cfg.lifetime,
-                                        encounter_scale=cfg.encounter_scale)
+        grid, field = self.wind.grid, self.wind.field(coefficients)
+
+        def make():
+            return PlumeModel.from_grid_map(grid, field, outlets=self._outlets, diffusivity=cfg.diffusivity,
+                                            lifetime=cfg.lifetime, encounter_scale=cfg.encounter_scale)
+
+        if self.wind.n_readings != 1:
+            return make()
+        key = content_digest(grid.occupancy, float(grid.resolution),
+                             tuple(np.asarray(grid.origin, dtype=np.float64).ravel().tolist()),
+                             np.asarray(field, dtype=np.float64), self._outlets, float(cfg.diffusivity),
+                             float(cfg.lifetime), float(cfg.encounter_scale))
+        return _FIRST_PLUMES.get(key, make)
 
     def _refresh_wind(self) -> None:
         """Re-solve the plume with the current wind estimate at readings 1, 2, 4, 8, … when the coefficients moved

@@ -23,9 +23,13 @@ import numpy as np
 from scipy import ndimage as ndi
 from scipy.sparse.csgraph import dijkstra
 
+from .._shared._memo import ContentCache, content_digest
 from ..geometry._grid import free_space_graph
 
-__all__ = ["Tour", "exploration_tour"]
+__all__ = ["Tour", "exploration_tour", "shared_tour"]
+
+#: Tours of the houses met last in the process (shared_tour), keyed by what exploration_tour reads.
+_SHARED_TOURS = ContentCache(maxsize=8)
 
 
 @dataclass(frozen=True, eq=False)
@@ -165,3 +169,24 @@ def exploration_tour(house, *, start=(0.8, 6.0), waypoint_spacing: float = 1.6, 
     travel = np.arctan2(ahead[:, 1] - stops[:, 1], ahead[:, 0] - stops[:, 0])
     headings = tuple(t + np.arange(4) * (np.pi / 2) if w else np.array([t]) for t, w in zip(travel, wp))
     return Tour(stops=stops, headings=headings, path=path, distance=arc[keep], waypoint=wp, path_index=keep)
+
+
+def shared_tour(house, *, start=(0.8, 6.0), clearance: float = 0.25) -> Tour:
+    """:func:`exploration_tour` of ``house`` from ``start``, computed once per house content, start and clearance
+    in the process and shared by every run (its arrays read-only).
+
+    The key is what the tour reads: the robot's obstacles, the grid's frame, the rooms and the arguments.
+    """
+    grid = house.grid
+    xy = tuple(float(v) for v in np.asarray(start, dtype=np.float64).ravel())
+    key = content_digest(house.robot_obstacles, house.room_labels, len(house.room_names), grid.shape,
+                         float(grid.resolution), tuple(np.asarray(grid.origin, dtype=np.float64).ravel().tolist()),
+                         xy, float(clearance))
+
+    def make():
+        tour = exploration_tour(house, start=start, clearance=clearance)
+        for a in (tour.stops, tour.path, tour.distance, tour.waypoint, tour.path_index, *tour.headings):
+            a.flags.writeable = False
+        return tour
+
+    return _SHARED_TOURS.get(key, make)

@@ -331,7 +331,14 @@ class OlfactoryEstimator(abc.ABC):
         pos = np.asarray(positions, dtype=np.float64)
         if pos.ndim != 2 or pos.shape[1] != 2:
             raise ValueError(f"positions must have shape (n, 2) (x, y in metres), got {pos.shape}")
-        w = self.geometry.shape[1]
+        grid = self.model.geometry
+        h, w = grid.shape
+        if np.isfinite(pos).all():  # every position at once; any that is refused, one by one for its message
+            rc = grid.world_to_cell(pos)
+            r, c = rc[:, 0], rc[:, 1]
+            inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            if inside.all() and not grid.occupancy[r, c].any():
+                return r * w + c
         return np.array([r * w + c for r, c in (self.model.cell_of(p, "positions[i]") for p in pos)], np.int64)
 
     def hit_probability(self, positions) -> np.ndarray:

@@ -218,7 +218,9 @@ class GridInfotaxis(OlfactoryEstimator):
     def _component_rows(self, flat_cells) -> np.ndarray:
         """(J, K, H·W) κ_j G_j(x_k | s) of every component j for sensor cells x_k."""
         rows = np.stack([m.green_rows(flat_cells) for m in self._models])  # (M, K, H·W)
-        return self._kappa[:, None, None] * rows[self._component_model]
+        out = rows[self._component_model]  # (J, K, H·W), a new array
+        out *= self._kappa[:, None, None]
+        return out
 
     def _mix(self, loglik: np.ndarray) -> np.ndarray:
         """log Σ_j π_j exp(L_j(s)) of per-component log-likelihoods (J, H·W); L_0 itself for one component."""
@@ -292,8 +294,14 @@ class GridInfotaxis(OlfactoryEstimator):
         return np.log1p(-eps) + np.logaddexp(np.log(delta), np.log1p(-delta) - mu)
 
     def _hit_likelihood_rows(self, flat_cells: np.ndarray) -> np.ndarray:
-        p = -np.expm1(-self._component_rows(flat_cells))  # (J, K, H·W)
-        p = self.false_hit_rate + (1.0 - self.false_hit_rate) * ((1.0 - self.missed_hit_rate) * p)  # P_θj(hit | s)
+        # P_θj(hit | s) = ε + (1 − ε)((1 − δ)(1 − e^{−κG})), each step in place on the new (J, K, H·W) array
+        p = self._component_rows(flat_cells)
+        np.negative(p, out=p)
+        np.expm1(p, out=p)
+        np.negative(p, out=p)
+        p *= 1.0 - self.missed_hit_rate
+        p *= 1.0 - self.false_hit_rate
+        p += self.false_hit_rate
         if p.shape[0] == 1:
             return p[0]
         return np.tensordot(np.exp(self._log_weights), p, axes=1)  # prior predictive Σ_j π_j P_θj(hit | s)

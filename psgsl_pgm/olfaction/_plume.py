@@ -141,7 +141,7 @@ class PlumeModel:
         self._index = index
         self._index_flat = index.ravel()
         self._active_flat = np.flatnonzero(self._index_flat >= 0)
-        self._lu = spla.splu(A) if A.shape[0] > 0 else None
+        self._lu_factors = None  # SuperLU factors of A, on first use (_lu)
         self._cache: OrderedDict[int, np.ndarray] = OrderedDict()
         self.n_solves = 0  # adjoint right-hand sides solved so far (for benchmarks)
 
@@ -175,6 +175,14 @@ class PlumeModel:
     def active_index(self) -> np.ndarray:
         """(H, W) int64: row/column of each cell in :attr:`operator`; −1 on occupied and outlet cells."""
         return self._index
+
+    @property
+    def _lu(self):
+        """The sparse LU factorisation of A, computed on first use: a model replaced before its first solve (the
+        closed loop's prior-wind model, replaced at the first wind reading) never pays for it."""
+        if self._lu_factors is None and self._A.shape[0] > 0:
+            self._lu_factors = spla.splu(self._A)
+        return self._lu_factors
 
     @property
     def factor(self):

@@ -48,11 +48,16 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse as sp
 
+from .._shared._memo import ContentCache, content_digest
 from .._shared._validate import bool_mask, positive, unit_interval
 
 __all__ = ["DetectionModel"]
 
 _PATHS_MAX = 1024  # paths whose found hypotheses are kept (the drives between a run's stops: tens to hundreds)
+
+#: Detection models of the houses met last in the process (DetectionModel.shared), keyed by content.
+_SHARED_MODELS = ContentCache(maxsize=8)
+
 #: Point-centre pairs compared at once: the (points, centres, 2) differences stay within 32 MiB however many
 #: cells a map has (a 1-cm house has 10⁵-10⁶ cells and footprints of thousands of cells).
 _PAIRS_AT_ONCE = 1 << 21
@@ -125,12 +130,38 @@ class DetectionModel:
         self._rows_cache: dict = {}
         self._paths: OrderedDict = OrderedDict()  # path points -> the hypotheses found along it (_found_along)
 
+    @property
+    def content_key(self) -> str:
+        """A digest of what decides which hypotheses a point finds: the grid's frame, the found radius and the
+        footprints (not the miss probability); equal models of equal houses have equal keys (a free space's
+        finder cells and findable masks are cached under it, :class:`psgsl_pgm.search.FreeSpace`)."""
+        key = self.__dict__.get("_content_key")
+        if key is None:
+            fp = np.packbits(np.stack(self.footprints)) if self.footprints else np.empty(0, np.uint8)
+            key = self._content_key = content_digest(
+                self.shape, float(self.grid.resolution),
+                tuple(np.asarray(self.grid.origin, dtype=np.float64).ravel().tolist()), float(self.found_radius),
+                len(self.footprints), fp)
+        return key
+
     @classmethod
     def from_house(cls, house, found_radius: float, *, miss_probability: float = 0.0) -> "DetectionModel":
         """The model on a house's map with its objects' whole footprints (:meth:`SceneObject.mask`, the furniture
         of the robot's obstacle map, including cells the map draws as occupied)."""
         return cls(house.grid, found_radius, footprints=[o.mask(house.grid) for o in house.objects],
                    miss_probability=miss_probability)
+
+    @classmethod
+    def shared(cls, house, found_radius: float, *, miss_probability: float = 0.0) -> "DetectionModel":
+        """:meth:`from_house`, one model per house content (grid, object footprints), radius and miss probability
+        in the process, shared by every run there: its cached rows and paths are functions of that content alone,
+        so a run gets the same numbers from a shared model as from a new one. Eight models are kept."""
+        grid = house.grid
+        key = content_digest(grid.occupancy, float(grid.resolution),
+                             tuple(np.asarray(grid.origin, dtype=np.float64).ravel().tolist()), found_radius,
+                             miss_probability, len(house.objects), *(o.footprint for o in house.objects))
+        return _SHARED_MODELS.get(key, lambda: cls.from_house(house, found_radius,
+                                                               miss_probability=miss_probability))
 
     def region_mask(self, source_cell: int) -> np.ndarray:
         """(H, W) bool: the found region R(c) of the hypothesis ``source_cell`` (module docstring): the footprint of

@@ -21,6 +21,7 @@ import numpy as np
 from scipy import ndimage as ndi
 from scipy.sparse.csgraph import connected_components, dijkstra
 
+from .._shared._memo import ContentCache, content_digest
 from ..geometry._fov import ViewCache
 from ..geometry._grid import free_space_graph
 
@@ -44,6 +45,9 @@ def _shared_views(key) -> dict:
         _SHARED_VIEWS.move_to_end(key)
     return hit
 
+
+#: Whole free spaces (:meth:`FreeSpace.shared`) of the houses met last in the process, keyed by their content.
+_SHARED_SPACES = ContentCache(maxsize=2)
 
 
 class FreeSpace:
@@ -92,7 +96,7 @@ class FreeSpace:
         lat[step // 2 :: step, step // 2 :: step] = True
         self.lattice = self._base_lattice = lat & self.nav
         self._lattice_spacing = step * self.resolution
-        self._finders: dict = {}  # found radius -> (K,) finder cells of cover()
+        self._finders: dict = {}  # (found radius, detection content) -> (K,) finder cells of cover()
         self._covered_for = None
         self.headings = 2 * np.pi * np.arange(int(n_headings)) / int(n_headings)
         self.centres = grid.cell_centres().reshape(-1, 2)
@@ -127,6 +131,25 @@ class FreeSpace:
                                            float(camera.max_range), float(camera.half_angle),
                                            float(camera.min_range), self.headings.tobytes()))
         self._component = None  # connected component of every cell in the graph (computed on first use)
+
+    @classmethod
+    def shared(cls, house, camera, *, clearance: float = 0.25, spacing: float = 0.5,
+               n_headings: int = 8) -> "FreeSpace":
+        """The free space of ``house`` for ``camera`` shared by every run of the process in a house of the same
+        content (walls, furniture, windows, grid frame), camera range and options: its drivable cells, geodesic
+        distances, views, finder cells and findable masks are computed once per house and process, not per run.
+
+        Every cache of a free space holds a function of that content alone (and of the detection model it is
+        given, :meth:`cover`, :meth:`findable`), so a shared space gives a run the same numbers as a new one. The
+        two spaces used last are kept.
+        """
+        grid = house.grid
+        key = content_digest(grid.occupancy, grid.free, house.robot_obstacles, float(grid.resolution),
+                             tuple(np.asarray(grid.origin, dtype=np.float64).ravel().tolist()),
+                             float(camera.max_range), float(camera.half_angle), float(camera.min_range),
+                             float(clearance), float(spacing), int(n_headings))
+        return _SHARED_SPACES.get(key, lambda: cls(house, camera, clearance=clearance, spacing=spacing,
+                                                   n_headings=n_headings))
 
     # --- cells and positions ------------------------------------------------------------------------------
     def cell_of(self, xy) -> int:
@@ -275,12 +298,13 @@ class FreeSpace:
         if detection.shape != self.nav.shape:
             raise ValueError(f"detection must be on this space's grid of shape {self.nav.shape}, got shape "
                              f"{detection.shape}")
-        finders = self._finders.get(r)
+        key = (r, detection.content_key)  # the finder cells of this house's footprints and radius
+        finders = self._finders.get(key)
         if finders is None:
             finders = self._finder_cells(detection)
             finders.flags.writeable = False
-            self._finders[r] = finders
-        if self._covered_for != r:
+            self._finders[key] = finders
+        if self._covered_for != key:
             lattice = self._base_lattice.copy()
             lattice.ravel()[finders] = True
             if not np.array_equal(lattice, self.lattice):
@@ -288,7 +312,7 @@ class FreeSpace:
                     del self._discs[key]
                 self._candidate_keys.clear()
             self.lattice = lattice
-            self._covered_for = r
+            self._covered_for = key
         return finders
 
     def findable(self, detection, cell: int) -> np.ndarray:
@@ -309,7 +333,7 @@ class FreeSpace:
         if self._component is None:
             self._component = connected_components(self.graph, directed=False)[1]
         part = int(self._component[int(cell)])
-        key = ("findable", float(detection.found_radius), part)
+        key = ("findable", float(detection.found_radius), detection.content_key, part)
         hit = self._discs.get(key)
         if hit is None:
             nav = np.flatnonzero(self.nav.ravel() & (self._component == part))

@@ -25,7 +25,7 @@ import numpy as np
 from ..experiment._config import VARIANTS, ExperimentConfig
 from ..experiment._metrics import _error_and_spread
 from ..experiment._step import VariantPosteriors, robot_hit_rule, start_run, visit
-from ..experiment._tour import exploration_tour
+from ..experiment._tour import shared_tour
 from ._declare import declaration_error, declared_region, propose_declaration
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
@@ -143,11 +143,11 @@ class ClosedLoopEpisode:
         # as `world check` measures from); the embedded house: the search settings' start
         start_xy = search.start if world_spec is None else tuple(float(v) for v in setting.start_for(house))
         if space is None:
-            space = FreeSpace(house, world.camera, clearance=search.clearance, spacing=search.spacing,
-                              n_headings=search.n_headings)
+            space = FreeSpace.shared(house, world.camera, clearance=search.clearance, spacing=search.spacing,
+                                     n_headings=search.n_headings)
         beliefs = VariantPosteriors(world, estimator, config, setting=setting, variants=(variant,), seed=int(seed))
         self.hits = robot_hit_rule(world.gas_sensor)  # the robot's hit decision for its kind of sensor
-        tour = exploration_tour(house, start=start_xy, clearance=search.clearance)
+        tour = shared_tour(house, start=start_xy, clearance=search.clearance)  # the same for every run here
         self._plan = _tour_plan(tour) if policy == "tour" else None
         self.centres = house.grid.cell_centres().reshape(-1, 2)
         truth = world.source
@@ -164,7 +164,7 @@ class ClosedLoopEpisode:
         else:
             robot_m = 0.0
         self.robot_m = robot_m
-        detection = DetectionModel.from_house(house, r, miss_probability=robot_m)
+        detection = DetectionModel.shared(house, r, miss_probability=robot_m)
         self.truth_hypothesis = detection.source_cell(truth, world.source_object, house)
         self.truth_region = (detection.centres[detection.region_mask(self.truth_hypothesis).ravel()]
                              if world.source_object is not None else None)  # the scoring's footprint of an object

@@ -13,6 +13,7 @@ Modelling choices (2-D):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 import scipy.ndimage as ndi
@@ -347,6 +348,13 @@ def default_house(seed: int = 0) -> House:
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise TypeError(f"seed must be an integer, got {seed!r}")
+    return _default_house(int(seed))
+
+
+@lru_cache(maxsize=8)
+def _default_house(seed: int) -> House:
+    """The house of :func:`default_house`, built once per seed in a process (a House is immutable: its arrays are
+    read-only), so the runs of a grid share it."""
     w, h = int(round(_SIZE[0] / _RES)), int(round(_SIZE[1] / _RES))
     centres = GridMap(np.zeros((h, w), bool), _RES).cell_centres()
     walls = np.zeros((h, w), bool)

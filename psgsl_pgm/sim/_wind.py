@@ -20,6 +20,7 @@ import scipy.ndimage as ndi
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .._shared._memo import ContentCache, content_digest
 from ..geometry._grid import GridMap
 
 __all__ = ["WindField", "WindSequence", "potential_flow", "make_wind"]
@@ -153,6 +154,20 @@ def potential_flow(grid: GridMap, inlet, outlet, *, mean_speed: float = 0.2) -> 
         raise ValueError("inlet and outlet cells must be disjoint")
     if not (np.isfinite(mean_speed) and mean_speed > 0):
         raise ValueError(f"mean_speed must be a positive number in m/s, got {mean_speed!r}")
+    key = content_digest(grid.occupancy, inlet, outlet, float(grid.resolution),
+                         tuple(np.asarray(grid.origin, dtype=np.float64).tolist()))
+    field, current = _UNSCALED_FLOWS.get(key, lambda: _unscaled_flow(grid, inlet, outlet))
+    return field.scaled(mean_speed / current)
+
+
+#: The unscaled potential flow of each house's map and windows (one sparse solve), shared by every run of the
+#: process: the simulator's wind and the robot's wind basis of every seed start from it.
+_UNSCALED_FLOWS = ContentCache(maxsize=8)
+
+
+def _unscaled_flow(grid: GridMap, inlet: np.ndarray, outlet: np.ndarray):
+    """The potential flow's field before scaling and its mean speed over the free non-window cells; checked
+    windows (:func:`potential_flow`)."""
     h, w = grid.shape
     free = grid.free | inlet | outlet
     dirichlet = inlet | outlet
@@ -194,7 +209,7 @@ def potential_flow(grid: GridMap, inlet, outlet, *, mean_speed: float = 0.2) -> 
     current = field.speed()[inner].mean()
     if not current > 0:
         raise ValueError("the potential flow is zero everywhere (inlet and outlet at the same potential?)")
-    return field.scaled(mean_speed / current)
+    return field, current  # a WindField's arrays are read-only
 
 
 def _stream_perturbation(free_nodes_mask: np.ndarray, taper: np.ndarray, xi: np.ndarray, res: float, grid):

@@ -47,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._shared._memo import ContentCache, content_digest
 from .._shared._validate import check_keys, positive
 from .._shared._validate import did_you_mean as _did_you_mean
 from ..core._ontology import Ontology
@@ -346,9 +347,13 @@ def _true_class(o: SceneObject) -> str:
 
 
 def default_world() -> WorldSpec:
-    """The embedded house as a world (``psgsl_pgm/data/worlds/house.yaml``)."""
+    """The embedded house as a world (``psgsl_pgm/data/worlds/house.yaml``); read once per process and file
+    content (a WorldSpec is immutable), so the runs of a grid share it."""
     with resources.as_file(resources.files("psgsl_pgm") / "data" / "worlds" / "house.yaml") as path:
-        return load_world(path)
+        return _DEFAULT_WORLDS.get(content_digest(Path(path).read_bytes()), lambda: load_world(path))
+
+
+_DEFAULT_WORLDS = ContentCache(maxsize=1)
 
 
 def default_world_path() -> Path:

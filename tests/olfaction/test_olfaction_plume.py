@@ -113,6 +113,18 @@ def test_green_is_zero_on_walls_outlets_and_across_sealed_walls():
     assert (g2[:, :7][~occ2[:, :7] & ~outlets[:, :7]] > 0).all()
 
 
+def test_the_factorisation_is_made_on_first_use_and_kept():
+    occ, wind, outlets = _random_map(np.random.default_rng(4))
+    m = PlumeModel(occ, resolution=0.1, wind=wind, outlets=outlets)
+    assert m._lu_factors is None  # a model never solved pays no factorisation
+    g = m.green_rows([np.flatnonzero(~occ.ravel() & ~outlets.ravel())[0]])
+    lu = m.factor
+    assert lu is not None and m.factor is lu and m.n_solves == 1
+    fresh = PlumeModel(occ, resolution=0.1, wind=wind, outlets=outlets)
+    fresh.factor  # factorised before the first solve: the same rows
+    np.testing.assert_array_equal(g, fresh.green_rows([np.flatnonzero(~occ.ravel() & ~outlets.ravel())[0]]))
+
+
 def test_adding_absorbing_outlets_lowers_every_green_value():
     rng = np.random.default_rng(5)
     occ, wind, _ = _random_map(rng, shape=(12, 12))

@@ -36,10 +36,9 @@ GOLDEN = {
 #: where GOLDEN was recorded: numpy, scipy, AVX-512 (numpy's SIMD exp and log), OpenBLAS kernels of numpy's build;
 #: with one BLAS thread, as the grid's workers run (a threaded BLAS splits its sums differently)
 RECORDED_ON = ("2.4.6", "1.17.1", False, "Haswell")
-#: the platforms on which the same hashes were reproduced (an AMD Zen 3 with OpenBLAS's Haswell kernels); earlier
-#: hashes of this file reproduced on AVX-512 with SkylakeX kernels as well, and a platform is added here once
-#: these are checked on it
-VERIFIED_ON = (RECORDED_ON,)
+#: the platforms on which the same hashes were reproduced (an AMD Zen 3 with OpenBLAS's Haswell kernels; an AMD
+#: Zen 4 with AVX-512 and OpenBLAS's SkylakeX kernels); a platform is added here once these are checked on it
+VERIFIED_ON = (RECORDED_ON, ("2.4.6", "1.17.1", True, "SkylakeX"))
 
 
 def _platform():
