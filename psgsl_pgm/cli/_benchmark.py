@@ -137,6 +137,10 @@ def _run(args) -> int:
         from ..sim import check_free_cells, load_world
 
         check_free_cells(load_world(args.world))  # a map too fine for the runs' memory: one line naming 'resolution'
+    from ..search._policies import check_estimator
+
+    for policy in args.policies:
+        check_estimator(policy, args.estimator)  # e.g. pmfs-nav without pmfs: one line, before anything is written
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
     what = args.world if args.world is not None else f"{len(house_ids)} generated homes"
     print(f"psgsl benchmark: {what} ({args.split} split), seeds {seed_ids.start}-{seed_ids.stop - 1}, policies "

@@ -357,6 +357,32 @@ class FilamentPMFS(OlfactoryEstimator):
         """(H, W) conf = 1 − exp(−ω / m²)."""
         return (-np.expm1(-self._omega / self.confidence_weight ** 2)).reshape(self.geometry.shape)
 
+    def hit_variance(self) -> np.ndarray:
+        r"""(H, W) how much the simulated sources disagree about a reading at each cell: PMFS's
+        ``varianceOfHitProb``, the weighted variance over the first-level regions k of the last refresh,
+
+        .. math:: \operatorname{Var}_c = \frac{\sum_k w_k (h_c(k) - \bar h_c)^2}{\sum_k w_k}, \qquad
+                  \bar h_c = \frac{\sum_k w_k h_c(k)}{\sum_k w_k},
+
+        with w_k ∝ Π_c [1 − conf_c + conf_c (1 − γ abs(ĥ_c − h_c(k)))], each region's score under the current hit
+        map and confidence (PMFS weighs by the score at the refresh; the two differ by the readings since), scaled
+        so that the largest is 1. Zeros before the first refresh and on occupied cells. PMFS's navigation
+        (:mod:`psgsl_pgm.search._pmfs_nav`) drives to where this, times 1 − conf, is largest.
+        """
+        out = np.zeros(self.geometry.shape[0] * self.geometry.shape[1])
+        if self._sim is None:
+            return out.reshape(self.geometry.shape)
+        free = self.geometry.free.ravel()
+        mass = np.isfinite(self._log_prior[free])
+        coarse = np.unique(self._coarse[mass])  # the first level: every region with prior mass
+        sim = self._sim[coarse]
+        score = self._score(sim, None, self._log_odds, self._omega)
+        w = np.exp(score - score.max())
+        h = sim[:, self._block[free]]  # (K, n_free) h_c(k)
+        mean = (w @ h) / w.sum()
+        out[free] = (w @ (h - mean) ** 2) / w.sum()
+        return out.reshape(self.geometry.shape)
+
     def simulated_hit_map(self, position) -> np.ndarray:
         """(H, W) the simulated hit frequency h_c(k) of the region k holding ``position`` (x, y) m (the last
         refresh; zeros before the first)."""

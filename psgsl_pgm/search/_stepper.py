@@ -30,7 +30,7 @@ from ._declare import declaration_error, propose_declaration
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
 from ._choose import choose
-from ._policies import POLICIES, Situation, check_semantics_alone
+from ._policies import POLICIES, Situation, check_estimator, check_semantics_alone
 from ._settings import SearchConfig, SearchRun
 from ._space import FreeSpace
 
@@ -122,6 +122,7 @@ class ClosedLoopEpisode:
             raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
         if policy is not None:
             check_semantics_alone(policy, variant)
+            check_estimator(policy, estimator)
         config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec,
                                                  gas_type=gas_type)
         if recorder is not None:
