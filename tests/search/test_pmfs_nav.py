@@ -10,6 +10,7 @@ from psgsl_pgm import GridMap
 from psgsl_pgm.olfaction import FilamentPMFS, PlumeModel
 from psgsl_pgm.search import FreeSpace, SearchConfig, Situation, choose, run_closed_loop
 from psgsl_pgm.search import _pmfs_nav
+from psgsl_pgm.search._grid import run_search_grid
 from psgsl_pgm.search._policies import check_estimator
 from psgsl_pgm.sim import Camera
 
@@ -101,6 +102,14 @@ def test_pmfs_nav_needs_the_pmfs_estimator(room):
         check_estimator("pmfs-nav", "infotaxis")
     with pytest.raises(ValueError, match="estimator 'pmfs' only"):
         run_closed_loop("oven", 0, "pmfs-nav", "olfaction", "grgsl", search=SearchConfig(time_budget=30.0))
+
+
+def test_a_grid_of_pmfs_nav_without_the_pmfs_estimator_is_refused_before_any_run(tmp_path):
+    with pytest.raises(ValueError, match="policy 'pmfs-nav' runs with estimator 'pmfs' only, got 'grgsl'"):
+        run_search_grid(policies=("pmfs-nav",), estimators=("grgsl",), seeds=(0,), out=tmp_path / "g")
+    with pytest.raises(ValueError, match="grid entries: policy 'pmfs-nav' runs with estimator 'pmfs' only"):
+        run_search_grid(grid=[("oven", "pmfs-nav", "olfaction", "infotaxis", 0)], out=tmp_path / "g")
+    assert not (tmp_path / "g" / "runs").exists() or not any((tmp_path / "g" / "runs").iterdir())
 
 
 @pytest.mark.slow
