@@ -1,10 +1,10 @@
 """The methods table of docs/results/methods.md from stored runs: one row per method, estimator and variant.
 
-    python benchmarks/methods_table.py RUNS_DIR [RUNS_DIR ...] [--by source|all] [--budget 1000]
+    python benchmarks/methods_table.py RUNS_DIR [RUNS_DIR ...] [--by source|house|all] [--budget 1000]
 
 Every ``*.npz`` run below the given folders (``psgsl benchmark`` and ``psgsl search`` outputs) is read; runs are
 grouped by (policy, estimator, variant) and, with ``--by source``, by the source (the embedded house's oven, bed
-and floor point). Per group: correct declarations of runs; RMST(τ) of the time to a correct declaration with
+and floor point), with ``--by house`` by the generated home. Per group: correct declarations of runs; RMST(τ) of the time to a correct declaration with
 Greenwood's 95 % interval (:func:`psgsl_pgm.search._survival.rmst`); the median error of the declarations made,
 m; and the CPU per decision, s (the benchmark's measured CPU of a run over its stops; the search command does
 not record CPU, "—").
@@ -38,14 +38,15 @@ def _cell(runs, budget):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("folders", nargs="+", type=Path)
-    ap.add_argument("--by", choices=["source", "all"], default="all")
+    ap.add_argument("--by", choices=["source", "house", "all"], default="all")
     ap.add_argument("--budget", type=float, default=1000.0)
     a = ap.parse_args(argv)
     groups = collections.defaultdict(list)
     for folder in a.folders:
         for f in sorted(folder.rglob("*.npz")):
             r = load_search_run(f)
-            src = str(r.source) if a.by == "source" else "all"
+            src = {"source": str(r.source), "house": (r.config.get("benchmark") or {}).get("house", "—"),
+                   "all": "all"}[a.by]
             groups[(r.policy, r.estimator, r.variant, src)].append(r)
     sources = sorted({k[3] for k in groups})
     print("| policy | estimator | variant | " + " | ".join(sources) + " |")
