@@ -5,9 +5,9 @@
 Every ``*.npz`` run below the given folders (``psgsl benchmark`` and ``psgsl search`` outputs) is read; runs are
 grouped by (policy, estimator, variant) and, with ``--by source``, by the source (the embedded house's oven, bed
 and floor point), with ``--by house`` by the generated home. Per group: correct declarations of runs; RMST(τ) of the time to a correct declaration with
-Greenwood's 95 % interval (:func:`psgsl_pgm.search._survival.rmst`); the median error of the declarations made,
-m; and the CPU per decision, s (the benchmark's measured CPU of a run over its stops; the search command does
-not record CPU, "—").
+Greenwood's 95 % interval (:func:`psgsl_pgm.search._survival.rmst`); wrong declarations of those made; the median
+error of the declarations made, m; and the CPU per stop, s (the process time the benchmark measures for a whole
+run, the simulated world included, over the run's stops; the search command does not record CPU: "—").
 """
 
 import argparse
@@ -32,7 +32,9 @@ def _cell(runs, budget):
     rm = f"{m['value']:.0f}" if ok == 0 else f"{m['value']:.0f} [{max(lo, 0):.0f}, {min(hi, budget):.0f}]"
     e = f"{np.median(err):.2f}" if err else "—"
     c = f"{np.mean(cpu):.2f}" if cpu else "—"
-    return f"{ok}/{n}, {rm}, {e}, {c}"
+    made = sum(bool(r.declared) for r in runs)
+    wrong = f"{sum(bool(r.declared) and not bool(r.declared_correct) for r in runs)} of {made}" if made else "—"
+    return f"{ok}/{n}, {rm}, {wrong}, {e}, {c}"
 
 
 def main(argv=None):
