@@ -65,6 +65,10 @@ def add_parser(subparsers):
                    help="closed-loop policies (default: %(default)s)")
     p.add_argument("--variants", nargs="+", default=list(BENCHMARK_VARIANTS),
                    help="information variants (default: %(default)s)")
+    from ..experiment._config import ESTIMATORS
+
+    p.add_argument("--estimator", choices=ESTIMATORS, default="infotaxis",
+                   help="the olfactory estimator p(s | g) every run uses (default: %(default)s)")
     p.add_argument("--conditions", nargs="+", default=list(CONDITIONS),
                    help=f"ontology conditions among {', '.join(CONDITIONS)} (default: all)")
     p.add_argument("--off-rate", type=float, default=0.1,
@@ -140,6 +144,10 @@ def _run(args) -> int:
         from ..sim import check_free_cells, load_world
 
         check_free_cells(load_world(args.world))  # a map too fine for the runs' memory: one line naming 'resolution'
+    from ..search._policies import check_estimator
+
+    for policy in args.policies:
+        check_estimator(policy, args.estimator)  # e.g. pmfs-nav without pmfs: one line, before anything is written
     check_output_dir(args.out, subdirs=("runs",))  # unwritable: fails now, not after the runs
     what = args.world if args.world is not None else f"{len(house_ids)} generated homes"
     print(f"psgsl benchmark: {what} ({args.split} split), seeds {seed_ids.start}-{seed_ids.stop - 1}, policies "
@@ -149,7 +157,7 @@ def _run(args) -> int:
     try:
         summary = run_benchmark(out=args.out, houses=args.houses, seeds=args.seeds, world=args.world,
                                 policies=args.policies, variants=args.variants, conditions=args.conditions,
-                                off_rate=args.off_rate, gases=gases, first_house=args.first_house,
+                                off_rate=args.off_rate, gases=gases, estimator=args.estimator, first_house=args.first_house,
                                 house_options=options, workers=args.workers, scheduler=args.scheduler,
                                 config=config, search=search, progress=not args.quiet, figures=not args.no_figures,
                                 command=command, split=args.split, gas_unknown=args.gas == "unknown",

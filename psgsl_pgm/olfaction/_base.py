@@ -38,6 +38,12 @@ class Observation:
     wind: tuple[float, float] | None
 
 
+def _check_model(model) -> None:
+    """TypeError unless ``model`` is a :class:`PlumeModel`."""
+    if not isinstance(model, PlumeModel):
+        raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+
+
 def _as_hit(hit) -> bool:
     if isinstance(hit, (bool, np.bool_)):
         return bool(hit)
@@ -54,9 +60,13 @@ class OlfactoryEstimator(abc.ABC):
     olfactory factor of eq. (11), p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z), to be fused
     with the semantic term by :func:`psgsl_pgm.fuse`.
 
-    Subclasses implement :meth:`_propose` (the unnormalised log posterior after one more reading, without
-    changing state) and :meth:`_accept` (commit it); :meth:`update` rejects a reading that would leave no cell
-    with positive probability (ValueError, state unchanged), so the posterior never holds NaN.
+    The bookkeeping of p(s | g) lives here, once for every estimator: the prior in log space (normalised,
+    −inf on occupied cells), the posterior log p(s) + log L(s) + Σ log P(F̄ | s) − log Z normalised with
+    ``logsumexp`` when first read, the "not found" factors of :meth:`condition` kept through later readings, and
+    the checks that no update leaves every cell at probability zero. Subclasses implement :meth:`_propose` (the
+    log-likelihood log L(s) of every reading so far, after one more, without changing state) and :meth:`_accept`
+    (commit it); :meth:`update` rejects a reading that would leave no cell with positive probability
+    (ValueError, state unchanged), so the posterior never holds NaN.
 
     Parameters
     ----------
@@ -67,8 +77,7 @@ class OlfactoryEstimator(abc.ABC):
     """
 
     def __init__(self, model: PlumeModel, *, prior=None):
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+        _check_model(model)
         self.model = model
         self.geometry = model.geometry
         free = self.geometry.free.ravel()
@@ -97,7 +106,16 @@ class OlfactoryEstimator(abc.ABC):
         self._observations: list[Observation] = []
         self._log_other = None  # Σ of the log-likelihoods given to condition() (None: none given)
         self._reset_state()
-        self._set_log_posterior(self._log_prior.copy())
+        self._set_log_posterior(self._initial_log_posterior())
+
+    def _initial_log_posterior(self) -> np.ndarray:
+        """The flat (unnormalised) log posterior before any reading: the prior."""
+        return self._log_prior.copy()
+
+    def _support(self) -> np.ndarray:
+        """(H·W,) log p(s) + Σ log P(F̄ | s): the prior times the factors given to :meth:`condition` so far (−inf
+        outside the support)."""
+        return self._log_prior if self._log_other is None else self._log_prior + self._log_other
 
     @abc.abstractmethod
     def _reset_state(self) -> None:
@@ -105,7 +123,8 @@ class OlfactoryEstimator(abc.ABC):
 
     @abc.abstractmethod
     def _propose(self, obs: Observation):
-        """Return (unnormalised flat log posterior, payload) after ``obs``; must not change state."""
+        """Return (flat log-likelihood log L(s) of every reading so far and ``obs``, payload); must not change
+        state. The prior and the "not found" factors are added by the caller."""
 
     @abc.abstractmethod
     def _accept(self, obs: Observation, payload) -> None:
@@ -157,14 +176,9 @@ class OlfactoryEstimator(abc.ABC):
         posterior : (H, W) ndarray of float64
             p(s | g) after this reading (read-only view; see :attr:`posterior`).
         """
-        cell = self.model.cell_of(position)
-        obs = Observation(
-            position=tuple(float(v) for v in np.asarray(position, dtype=np.float64)),
-            cell=cell,
-            hit=_as_hit(hit),
-            wind=as_wind_vector(wind),
-        )
+        obs = self._observation(position, hit, wind)
         log_target, payload = self._propose(obs)
+        log_target = self._log_prior + log_target
         if self._log_other is not None:
             log_target = log_target + self._log_other
         finite = np.isfinite(log_target) & self.geometry.free.ravel()
@@ -180,6 +194,24 @@ class OlfactoryEstimator(abc.ABC):
         self._set_log_posterior(log_target)
         return self.posterior
 
+    def _observation(self, position, hit, wind) -> Observation:
+        """The checked :class:`Observation` of one reading (its cell must be free)."""
+        return Observation(
+            position=tuple(float(v) for v in np.asarray(position, dtype=np.float64)),
+            cell=self.model.cell_of(position),
+            hit=_as_hit(hit),
+            wind=as_wind_vector(wind),
+        )
+
+    def _adopt_model(self, model: PlumeModel) -> None:
+        """Take ``model`` as the plume model after checking that it is one of the same map (same shape, same
+        walls); nothing is re-assimilated."""
+        _check_model(model)
+        if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
+                                                                             self.geometry.occupancy):
+            raise ValueError(f"model must be on the same map ({self.geometry.shape} cells, same walls)")
+        self.model = model
+
     def replace_model(self, model: PlumeModel) -> np.ndarray:
         """Re-assimilate every reading so far under a new plume model of the same map (e.g. one solved with a
         refreshed wind estimate) and return the new posterior.
@@ -189,17 +221,13 @@ class OlfactoryEstimator(abc.ABC):
         readings and conditioned on the same observations.
         Cost: one adjoint solve per distinct sensor cell visited, on ``model``'s (empty) cache.
         """
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
-        if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
-                                                                             self.geometry.occupancy):
-            raise ValueError(f"model must be on the same map ({self.geometry.shape} cells, same walls)")
-        self.model = model
+        self._adopt_model(model)
         self._reset_state()
         log_post = self._log_prior.copy()
         for obs in self._observations:
-            log_post, payload = self._propose(obs)
+            log_lik, payload = self._propose(obs)
             self._accept(obs, payload)
+            log_post = self._log_prior + log_lik
         if self._log_other is not None:  # p(s | g, F̄) ∝ p(s | g) P(F̄ | s): the "not found" factors stay
             log_post = log_post + self._log_other
         self._set_log_posterior(log_post)
@@ -250,6 +278,14 @@ class OlfactoryEstimator(abc.ABC):
         """:meth:`condition` without reading the conditioned posterior back: it is normalised when first read,
         and the closed loop's next reading replaces it unread (one log-sum-exp and one exp of the map saved per
         stop; the same numbers whenever it is read)."""
+        ll = self._as_log_likelihood(log_likelihood)
+        log_target = self._log_post + ll
+        self._check_some_mass(log_target)
+        self._log_other = ll.copy() if self._log_other is None else self._log_other + ll
+        self._set_log_posterior(log_target)
+
+    def _as_log_likelihood(self, log_likelihood) -> np.ndarray:
+        """``log_likelihood`` of :meth:`condition` checked and flattened: (H·W,) float64, finite or −inf."""
         ll = as_float_array(log_likelihood, "log_likelihood", dtype=np.float64)
         n = self.geometry.shape[0] * self.geometry.shape[1]
         if ll.size != n or ll.shape not in (self.geometry.shape, (n,)):
@@ -258,12 +294,13 @@ class OlfactoryEstimator(abc.ABC):
         ll = ll.astype(np.float64).ravel()
         if np.isnan(ll).any() or (ll == np.inf).any():
             raise ValueError("log_likelihood must be finite or -inf (no NaN, no +inf)")
-        log_target = self._log_post + ll
+        return ll
+
+    def _check_some_mass(self, log_target: np.ndarray) -> None:
+        """ValueError when the flat log posterior ``log_target`` of a factor is −inf on every free cell."""
         if not np.isfinite(log_target[self.geometry.free.ravel()]).any():
             raise ValueError("the observation has zero likelihood for every cell with positive probability; "
                              "it was not applied")
-        self._log_other = ll.copy() if self._log_other is None else self._log_other + ll
-        self._set_log_posterior(log_target)
 
     # --- read-out -------------------------------------------------------------------------------------------
     @property

@@ -12,7 +12,7 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.special import expit
 
 from .._shared._validate import index, positive, unit_interval
-from ._base import Observation, OlfactoryEstimator
+from ._base import Observation, OlfactoryEstimator, _check_model
 from ._gmrf_wind import GMRFWind
 from ._hitmap import HitProbabilityMap
 from ._plume import PlumeModel
@@ -147,8 +147,7 @@ class FilamentPMFS(OlfactoryEstimator):
                  hit_value: float = 0.6, miss_value: float = 0.05, kernel_sigma: float = 0.2,
                  kernel_stretch: float = 0.5, confidence_sigma: float = 0.15, confidence_weight: float = 0.5,
                  wind: dict | None = None):
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+        _check_model(model)
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise TypeError(f"seed must be an integer, got {seed!r}")
         self.seed = int(seed)
@@ -211,12 +210,7 @@ class FilamentPMFS(OlfactoryEstimator):
         """Take a plume model of the same map (e.g. one solved on a refreshed mean-wind estimate) without
         re-assimilating the readings: this estimator's update does not use the model's wind (it keeps its own GMRF
         wind map; its diffusivity was fixed at construction)."""
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
-        if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
-                                                                             self.geometry.occupancy):
-            raise ValueError(f"model must be on the same map ({self.geometry.shape} cells, same walls)")
-        self.model = model
+        self._adopt_model(model)
         return self.posterior
 
     # --- state ----------------------------------------------------------------------------------------------
@@ -329,9 +323,9 @@ class FilamentPMFS(OlfactoryEstimator):
             sim, assign = self._refresh(wind.field(), log_odds, omega)
             n_refresh += 1
         score = self._score(sim, assign, log_odds, omega)
-        log_post = self._log_prior.copy()
-        log_post[self.geometry.free.ravel()] += self.tempering * score[assign]
-        return log_post, (wind, log_odds, omega, sim, assign, n_refresh)
+        log_lik = np.zeros(self._log_prior.size)
+        log_lik[self.geometry.free.ravel()] = self.tempering * score[assign]
+        return log_lik, (wind, log_odds, omega, sim, assign, n_refresh)
 
     def _accept(self, obs: Observation, payload) -> None:
         self._wind, self._log_odds, self._omega, self._sim, self._assign, self._n_refresh = payload
@@ -362,6 +356,32 @@ class FilamentPMFS(OlfactoryEstimator):
     def confidence(self) -> np.ndarray:
         """(H, W) conf = 1 − exp(−ω / m²)."""
         return (-np.expm1(-self._omega / self.confidence_weight ** 2)).reshape(self.geometry.shape)
+
+    def hit_variance(self) -> np.ndarray:
+        r"""(H, W) how much the simulated sources disagree about a reading at each cell: PMFS's
+        ``varianceOfHitProb``, the weighted variance over the first-level regions k of the last refresh,
+
+        .. math:: \operatorname{Var}_c = \frac{\sum_k w_k (h_c(k) - \bar h_c)^2}{\sum_k w_k}, \qquad
+                  \bar h_c = \frac{\sum_k w_k h_c(k)}{\sum_k w_k},
+
+        with w_k ∝ Π_c [1 − conf_c + conf_c (1 − γ abs(ĥ_c − h_c(k)))], each region's score under the current hit
+        map and confidence (PMFS weighs by the score at the refresh; the two differ by the readings since), scaled
+        so that the largest is 1. Zeros before the first refresh and on occupied cells. PMFS's navigation
+        (:mod:`psgsl_pgm.search._pmfs_nav`) drives to where this, times 1 − conf, is largest.
+        """
+        out = np.zeros(self.geometry.shape[0] * self.geometry.shape[1])
+        if self._sim is None:
+            return out.reshape(self.geometry.shape)
+        free = self.geometry.free.ravel()
+        mass = np.isfinite(self._log_prior[free])
+        coarse = np.unique(self._coarse[mass])  # the first level: every region with prior mass
+        sim = self._sim[coarse]
+        score = self._score(sim, None, self._log_odds, self._omega)
+        w = np.exp(score - score.max())
+        h = sim[:, self._block[free]]  # (K, n_free) h_c(k)
+        mean = (w @ h) / w.sum()
+        out[free] = (w @ (h - mean) ** 2) / w.sum()
+        return out.reshape(self.geometry.shape)
 
     def simulated_hit_map(self, position) -> np.ndarray:
         """(H, W) the simulated hit frequency h_c(k) of the region k holding ``position`` (x, y) m (the last

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.sparse.csgraph import dijkstra
 
 from .._shared._validate import positive
-from ._base import Observation, OlfactoryEstimator
+from ._base import Observation, OlfactoryEstimator, _check_model
 from ._plume import PlumeModel
 
 __all__ = ["GrGSL"]
@@ -66,8 +66,7 @@ class GrGSL(OlfactoryEstimator):
 
     def __init__(self, model: PlumeModel, *, prior=None, ring_radius: float = 0.5, hit_std: float = 1.0,
                  miss_std: float = 2.0, wind_threshold: float = 0.05):
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+        _check_model(model)
         self.ring_radius = positive(ring_radius, "ring_radius", "m")
         self.hit_std = positive(hit_std, "hit_std", "rad")
         self.miss_std = positive(miss_std, "miss_std", "rad")
@@ -85,12 +84,7 @@ class GrGSL(OlfactoryEstimator):
         """Take a plume model of the same map (e.g. one solved on a refreshed mean-wind estimate) without
         re-assimilating the readings: this estimator's update does not use the model's wind (it reads the
         anemometer only)."""
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
-        if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
-                                                                             self.geometry.occupancy):
-            raise ValueError(f"model must be on the same map ({self.geometry.shape} cells, same walls)")
-        self.model = model
+        self._adopt_model(model)
         return self.posterior
 
     def _reset_state(self) -> None:
@@ -143,7 +137,7 @@ class GrGSL(OlfactoryEstimator):
             direction = float(np.arctan2(last[1] - obs.position[1], last[0] - obs.position[0]))
             factor = self.log_factor(obs.cell, direction, self.miss_std, np.pi)
         loglik = self._loglik if factor is None else self._loglik + factor
-        return self._log_prior + loglik, (loglik, last if (obs.hit or self._last_hit is not None) else None, first)
+        return loglik, (loglik, last if (obs.hit or self._last_hit is not None) else None, first)
 
     def _accept(self, obs: Observation, payload) -> None:
         self._loglik, self._last_hit, self._first = payload

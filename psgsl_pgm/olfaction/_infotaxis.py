@@ -316,7 +316,7 @@ class GridInfotaxis(OlfactoryEstimator):
         r, c = obs.cell
         ell = self._log_likelihood_flat(r * self.geometry.shape[1] + c, obs.hit)
         loglik = self._loglik + self.tempering * ell  # β Σ_k log P_θj(g_k | s), per component
-        return self._log_prior + self._mix(loglik), loglik
+        return self._mix(loglik), loglik
 
     def _accept(self, obs: Observation, payload) -> None:
         self._loglik = payload

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._shared._validate import as_float_array, index, positive, real_pair, unit_interval
-from ._base import Observation, OlfactoryEstimator, _as_hit
+from .._shared._validate import index, positive, real_pair, unit_interval
+from ._base import Observation, OlfactoryEstimator
 from ._plume import PlumeModel
-from ._wind_input import as_wind_vector
 
 __all__ = ["ParticleFilter"]
 
@@ -138,10 +137,6 @@ class ParticleFilter(OlfactoryEstimator):
         inside = (rc[:, 0] >= 0) & (rc[:, 0] < h) & (rc[:, 1] >= 0) & (rc[:, 1] < w)
         return np.where(inside, rc[:, 0] * w + rc[:, 1], -1)
 
-    def _support(self) -> np.ndarray:
-        """(H·W,) log prior + the factors so far (−inf outside the support)."""
-        return self._log_prior if self._log_other is None else self._log_prior + self._log_other
-
     def _draw(self, rng, n: int):
         """n particles from the prior times the factors so far; uniform within their cells."""
         log_p = self._support()
@@ -236,12 +231,9 @@ class ParticleFilter(OlfactoryEstimator):
         self._x, self._logq = self._draw(self._rng(0), self.n_particles)
         self._w = np.full(self.n_particles, 1.0 / self.n_particles)
 
-    def reset(self) -> None:
-        """Forget all readings and factors: N fresh particles from the prior (the same ones every time)."""
-        self._observations = []
-        self._log_other = None
-        self._reset_state()
-        self._set_log_posterior(self._grid_log_posterior())
+    def _initial_log_posterior(self) -> np.ndarray:
+        """After :meth:`reset`: N fresh particles from the prior (the same ones every time)."""
+        return self._grid_log_posterior()
 
     def _propose(self, obs: Observation):
         raise NotImplementedError("ParticleFilter updates through update()")  # pragma: no cover
@@ -260,8 +252,7 @@ class ParticleFilter(OlfactoryEstimator):
 
     def update(self, position, hit, wind=None) -> np.ndarray:
         """Assimilate one reading (:meth:`OlfactoryEstimator.update`) by reweighting the particles."""
-        obs = Observation(position=tuple(float(v) for v in np.asarray(position, dtype=np.float64)),
-                          cell=self.model.cell_of(position), hit=_as_hit(hit), wind=as_wind_vector(wind))
+        obs = self._observation(position, hit, wind)
         state = (self._x, self._logq, self._w, list(self._events))
         try:
             self._apply("obs", obs)
@@ -273,17 +264,8 @@ class ParticleFilter(OlfactoryEstimator):
         return self.posterior
 
     def _condition(self, log_likelihood) -> None:
-        ll = as_float_array(log_likelihood, "log_likelihood", dtype=np.float64)
-        n = self.geometry.shape[0] * self.geometry.shape[1]
-        if ll.size != n or ll.shape not in (self.geometry.shape, (n,)):
-            raise ValueError(f"log_likelihood must have the map's shape {self.geometry.shape} (or ({n},)), "
-                             f"got {ll.shape}")
-        ll = ll.astype(np.float64).ravel()
-        if np.isnan(ll).any() or (ll == np.inf).any():
-            raise ValueError("log_likelihood must be finite or -inf (no NaN, no +inf)")
-        if not np.isfinite(self._support() + ll)[self.geometry.free.ravel()].any():
-            raise ValueError("the observation has zero likelihood for every cell with positive probability; "
-                             "it was not applied")
+        ll = self._as_log_likelihood(log_likelihood)
+        self._check_some_mass(self._support() + ll)
         state = (self._x, self._logq, self._w, list(self._events), self._log_other)
         self._log_other = ll.copy() if self._log_other is None else self._log_other + ll
         try:
@@ -296,12 +278,7 @@ class ParticleFilter(OlfactoryEstimator):
     def replace_model(self, model: PlumeModel) -> np.ndarray:
         """Replay every reading and factor, in order and with the same draws, on a new plume model of the same map
         (:meth:`OlfactoryEstimator.replace_model`)."""
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
-        if model.geometry.shape != self.geometry.shape or not np.array_equal(model.geometry.occupancy,
-                                                                             self.geometry.occupancy):
-            raise ValueError(f"model must be on the same map ({self.geometry.shape} cells, same walls)")
-        self.model = model
+        self._adopt_model(model)
         events = self._events
         self._log_other = None
         self._reset_state()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared._validate import positive, unit_interval
-from ._base import Observation, OlfactoryEstimator
+from ._base import Observation, OlfactoryEstimator, _check_model
 from ._hitmap import HitProbabilityMap
 from ._plume import PlumeModel
 
@@ -115,8 +115,7 @@ class PMFSEstimator(OlfactoryEstimator):
     def from_model(cls, model: PlumeModel, *, prior=None, discrimination: float = 0.9, tempering: float = 1.0,
                    **hitmap) -> "PMFSEstimator":
         """Estimator on an existing :class:`PlumeModel` (shares its factorisation and Green's-function cache)."""
-        if not isinstance(model, PlumeModel):
-            raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
+        _check_model(model)
         self = cls.__new__(cls)
         self._configure(model, discrimination, hitmap, tempering)
         OlfactoryEstimator.__init__(self, model, prior=prior)
@@ -181,7 +180,7 @@ class PMFSEstimator(OlfactoryEstimator):
             score += self._log_factors(changed, h_obs[changed], conf[changed])
         if new:
             score += self._log_factors(np.array([k]), h_obs[k:], conf[k:])
-        return self._log_prior + self.tempering * score, (hitmap, new, flat, score, h_obs, conf)
+        return self.tempering * score, (hitmap, new, flat, score, h_obs, conf)
 
     def _accept(self, obs: Observation, payload) -> None:
         hitmap, new, flat, score, h_obs, conf = payload

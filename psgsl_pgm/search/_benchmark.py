@@ -38,7 +38,7 @@ from ..runs._key import digest, run_key, world_key
 from ._episodes import CONDITIONS, check_condition, draw_episode, draw_sources, findable_sources, robot_ontology
 from ._grid import closed_loop_in_world
 from ._settings import SearchConfig
-from ._policies import POLICIES, SEMANTICS_ALONE
+from ._policies import POLICIES, SEMANTICS_ALONE, check_estimator
 from ._reactive import REACTIVE
 from ._split import benchmark_sample, check_split
 from ._stepper import SEVERAL_ESTIMATORS
@@ -266,6 +266,8 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
                          f"are {list(variants)}")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
+    for p in policies:
+        check_estimator(p, estimator)
     off_rate = unit_interval(off_rate, "off_rate")
     n_seeds = index(seeds, "seeds", minimum=1)
     n_houses = index(houses, "houses")

@@ -1,5 +1,5 @@
 """One entry point for every policy's next stop: the policies of :mod:`._policies` and the methods of the field
-built on them (:mod:`._entrotaxis`, :mod:`._reactive`), which import :mod:`._policies` and so cannot be called
+built on them (:mod:`._entrotaxis`, :mod:`._reactive`, :mod:`._pmfs_nav`), which import :mod:`._policies` and so cannot be called
 from it."""
 
 from __future__ import annotations
@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._entrotaxis import choose_entrotaxis
+from ._pmfs_nav import choose_pmfs_nav
 from ._policies import (POLICIES, REACTIVE, Decision, Situation, _choose_infotaxis, _choose_space_aware,
                         _nearest_object_step, _semantic_step, _towards)
 from ._reactive import reactive_step
@@ -30,4 +31,6 @@ def choose(policy: str, sit: Situation) -> Decision:
         return choose_entrotaxis(sit)
     if policy in REACTIVE:
         return reactive_step(policy, sit)
+    if policy == "pmfs-nav":
+        return choose_pmfs_nav(sit)
     raise ValueError(f"policy must be one of {POLICIES[1:]} here (the tour is planned), got {policy!r}")

@@ -19,7 +19,7 @@ from ..runs._key import digest, run_key, world_key
 from ._loop import SearchConfig, run_closed_loop
 from ._metrics import declaration_summary, wilson_interval
 from ._split import split_of_seeds
-from ._policies import POLICIES, SEMANTICS_ALONE, check_semantics_alone
+from ._policies import ESTIMATOR_OF, POLICIES, SEMANTICS_ALONE, check_estimator, check_semantics_alone
 from ._reactive import REACTIVE
 from ._store import load_search_run, read_run_key, search_run_path, write_search_run
 from ._survival import holm, kaplan_meier, km_median, paired_comparison, rmst
@@ -337,8 +337,12 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     if grid is None:  # semantics alone has no olfaction variant, a reactive policy only it: those pairs are left out
         grid = [(so, p, v, e, se) for se, so, p, v, e in itertools.product(seeds, sources, policies, variants,
                                                                            estimators)
-                if not (p in SEMANTICS_ALONE and v == "olfaction") and not (p in REACTIVE and v != "olfaction")]
+                if not (p in SEMANTICS_ALONE and v == "olfaction") and not (p in REACTIVE and v != "olfaction")
+                and ESTIMATOR_OF.get(p, e) == e]  # a policy of one estimator's maps runs with that one
         if not grid:
+            for p in policies:
+                for e in estimators:
+                    check_estimator(p, e)  # e.g. pmfs-nav with estimators other than pmfs only
             if set(policies) <= set(REACTIVE):
                 raise ValueError(f"policies {list(policies)}: reactive policies run with variant 'olfaction' only; "
                                  f"variants are {list(variants)}")
@@ -351,6 +355,7 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
                 raise ValueError(f"grid entries must name a policy of {POLICIES}, a variant of {VARIANTS} and an "
                                  f"estimator of {ESTIMATORS}, got {(p, v, e)}")
             check_semantics_alone(p, v, where="grid entries: ")
+            check_estimator(p, e, where="grid entries: ")
     world = None if world is None else str(Path(world).resolve())
     world_part = world_key(world)
     world_digest = digest(world_part)

@@ -103,6 +103,8 @@ moves (:meth:`FreeSpace.candidates`).
   or the gas reading), on the candidates of ``infotaxis`` (:mod:`psgsl_pgm.search._entrotaxis`).
 * ``surge-cast``, ``spiral`` — reactive baselines: gas hits and anemometer readings only, no p(s | g), variant
   ``olfaction`` only (:mod:`psgsl_pgm.search._reactive`).
+* ``pmfs-nav`` — PMFS's own navigation (Ojeda et al.): to where the simulated sources disagree most about a
+  reading and the hit map is least confident; estimator ``pmfs`` only (:mod:`psgsl_pgm.search._pmfs_nav`).
 * ``tour`` — the fixed exploration tour (:func:`psgsl_pgm.experiment.exploration_tour`), back and forth.
 """
 
@@ -117,13 +119,14 @@ from .._shared._validate import one_of
 from ..core._infogain import semantic_information_gain
 from ._detection import DetectionModel
 
-__all__ = ["Decision", "POLICIES", "REACTIVE", "SCORES", "SEMANTICS_ALONE", "Situation", "check_reactive", "check_score",
+__all__ = ["Decision", "ESTIMATOR_OF", "POLICIES", "REACTIVE", "SCORES", "SEMANTICS_ALONE", "Situation",
+           "check_estimator", "check_reactive", "check_score",
            "check_semantics_alone", "object_scores", "olfactory_gain", "score_per_time", "semantic_mode",
            "travel_time"]
 
 #: Policies of the closed loop.
 POLICIES = ("tour", "greedy", "infotaxis", "space-aware-infotaxis", "semantic-modes", "nearest-object",
-            "entrotaxis", "surge-cast", "spiral")
+            "entrotaxis", "surge-cast", "spiral", "pmfs-nav")
 #: Policies that read the semantic term alone, no gas: they need a semantic variant.
 SEMANTICS_ALONE = ("semantic-modes", "nearest-object")
 #: Rules that turn a pose's gain G and time τ into its score (module docstring).
@@ -219,6 +222,18 @@ def check_reactive(policy: str, variant: str, *, where: str = "") -> None:
     if policy in REACTIVE and variant != "olfaction":
         raise ValueError(f"{where}policy {policy!r} (reactive: gas hits and wind only) runs with variant "
                          f"'olfaction' only, got {variant!r}")
+
+
+#: Policies that read one estimator's own maps, and that estimator.
+ESTIMATOR_OF = {"pmfs-nav": "pmfs"}
+
+
+def check_estimator(policy: str, estimator: str, *, where: str = "") -> None:
+    """ValueError when ``policy`` needs an estimator of its own (:data:`ESTIMATOR_OF`) and ``estimator`` is
+    another; ``where`` prefixes the message."""
+    need = ESTIMATOR_OF.get(policy)
+    if need is not None and estimator != need:
+        raise ValueError(f"{where}policy {policy!r} runs with estimator {need!r} only, got {estimator!r}")
 
 
 def check_semantics_alone(policy: str, variant: str, *, where: str = "") -> None:

@@ -30,7 +30,7 @@ from ._declare import declaration_error, declared_region, propose_declaration
 from ._detection import DetectionModel
 from ._metrics import credible_region, hpd_level
 from ._choose import choose
-from ._policies import POLICIES, Situation, check_semantics_alone
+from ._policies import POLICIES, Situation, check_estimator, check_semantics_alone
 from ._settings import SearchConfig, SearchRun
 from ._several import match_declarations, more_sources_probability
 from ._space import FreeSpace
@@ -129,6 +129,7 @@ class ClosedLoopEpisode:
             raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
         if policy is not None:
             check_semantics_alone(policy, variant)
+            check_estimator(policy, estimator)
         self.several = search.source_count_prior is not None  # declares sources one by one (module _several)
         if self.several and estimator not in SEVERAL_ESTIMATORS:
             raise ValueError(f"estimator must be one of {SEVERAL_ESTIMATORS} with source_count_prior (their "

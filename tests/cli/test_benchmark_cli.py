@@ -25,6 +25,7 @@ from psgsl_pgm.cli._main import main
     (["--off-rate", "1.5"], "off_rate"),
     (["--gases", "chlorine"], "gases must be gases of the ontology"),
     (["--first-house", "1000000"], "reference seeds"),
+    (["--policies", "infotaxis", "pmfs-nav"], "policy 'pmfs-nav' runs with estimator 'pmfs' only, got 'infotaxis'"),
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, extra, needle):
     out = tmp_path / "b"
@@ -163,3 +164,13 @@ def test_the_nearest_object_baseline_runs_in_the_benchmark(tmp_path):
                  "--budget", "40", "--workers", "1", "--quiet", "--out", str(out)]) == 0
     runs = sorted(p.name for p in (out / "runs").iterdir())
     assert runs == ["h00000__right-ontology__nearest-object__semantics+rooms__infotaxis__seed0.npz"]
+
+
+def test_the_estimator_option_runs_every_arm_on_that_estimator(tmp_path):
+    out = tmp_path / "b"
+    assert main(["benchmark", "--houses", "1", "--seeds", "1", "--rooms", "3", "--area", "45", "--policies",
+                 "infotaxis", "--variants", "olfaction", "--conditions", "right-ontology", "--estimator", "grgsl",
+                 "--budget", "40", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]) == 0
+    runs = sorted(p.name for p in (out / "runs").iterdir())
+    assert runs == ["h00000__right-ontology__infotaxis__olfaction__grgsl__seed0.npz"]
+    assert json.loads((out / "summary.json").read_text())["settings"]["estimator"] == "grgsl"
