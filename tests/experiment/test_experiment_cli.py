@@ -22,6 +22,7 @@ def demo_dir(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # the demo's fixture runs the whole small experiment on 2 workers (~11 s)
 def test_demo_writes_every_output_and_a_consistent_summary(demo_dir):
     for name in ("summary.json", "summary.txt", "metrics.csv", "error-chart.png", "progression.png",
                  "room-types.png"):
@@ -62,6 +63,7 @@ def test_experiment_is_resumable(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "oven-infotaxis" / "error-chart.png").exists()
 
 
+@pytest.mark.slow  # shares the demo's fixture
 def test_stored_runs_with_another_configuration_are_refused(demo_dir):
     from psgsl_pgm.experiment import ExperimentConfig, run_experiment
 

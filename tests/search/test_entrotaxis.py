@@ -101,6 +101,7 @@ def test_the_gain_is_the_entropy_of_found_hit_and_miss_under_the_detection_model
     assert np.all(gain <= np.log(3))
 
 
+@pytest.mark.slow  # a house episode with semantics, ~15 s
 def test_entrotaxis_runs_in_the_house_with_semantics():
     from psgsl_pgm.search import SearchConfig
 
