@@ -35,7 +35,8 @@ def house_and_wind():
     return house, wind.mean().velocity
 
 
-@pytest.mark.parametrize("source_class", ["oven", pytest.param("bed", marks=pytest.mark.slow)])  # 9 s each
+@pytest.mark.slow  # 6-9 s each source
+@pytest.mark.parametrize("source_class", ["oven", "bed"])
 def test_default_house_with_model_readings(house_and_wind, source_class):
     """120 x 100 cells at 0.1 m; 799 stops 0.3 m apart (≈ 30-50 hits). Measured over seeds 0-3 and the
     oven, bed and toilet: mean error ≤ 0.56 m (Infotaxis) and ≤ 0.67 m (PMFS), room mass ≥ 0.999. Asserted
