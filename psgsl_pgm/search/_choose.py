@@ -16,7 +16,28 @@ __all__ = ["choose"]
 
 
 def choose(policy: str, sit: Situation) -> Decision:
-    """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan)."""
+    """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan).
+
+    Parameters
+    ----------
+    policy : str
+        The policy's name: ``"greedy"`` (towards the MAP cell), ``"semantic-modes"``, ``"nearest-object"``,
+        ``"infotaxis"``, ``"space-aware-infotaxis"``, ``"entrotaxis"``, a reactive policy of :data:`REACTIVE`
+        (``"surge-cast"``, ``"spiral"``) or ``"pmfs-nav"``.
+    sit : Situation
+        What the robot knows at this stop: its pose, the posterior over source cells, its free space and the
+        settings the policy scores with.
+
+    Returns
+    -------
+    Decision
+        The next stop: flat cell, camera headings there, the path to it, the drive (m) and the winning score.
+
+    Raises
+    ------
+    ValueError
+        ``policy`` is ``"tour"`` or not a policy name.
+    """
     if policy == "greedy":
         return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell
     if policy == "semantic-modes":

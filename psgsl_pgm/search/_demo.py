@@ -19,6 +19,24 @@ def run_search_demo(out, *, seeds=DEMO_SEARCH_SEEDS, budget: float = DEMO_BUDGET
     """``infotaxis/olfaction`` vs ``infotaxis/semantics+rooms``, smoke from the oven, in ``out`` (resumable).
 
     Returns ``{"<policy>/<variant>": summary}`` (see :func:`psgsl_pgm.search.summarize_runs`).
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output folder (:func:`run_search_grid`'s ``out``): runs already stored there are not redone.
+    seeds : sequence of int, default :data:`DEMO_SEARCH_SEEDS`, keyword-only
+        The house seeds.
+    budget : float, default :data:`DEMO_BUDGET` (300 s), keyword-only
+        Each run's time budget, s.
+    workers : int, default 2, keyword-only
+        Worker processes of the grid runner.
+    progress : bool, default True, keyword-only
+        Show a progress bar.
+
+    Raises
+    ------
+    ValueError
+        As :func:`run_search_grid` (e.g. no seed, or ``out`` holds runs of another configuration).
     """
     top = run_search_grid(["oven"], ["infotaxis"], ["olfaction", "semantics+rooms"], ["infotaxis"], seeds,
                           out=Path(out), workers=workers, search=SearchConfig(time_budget=float(budget)),

@@ -54,7 +54,30 @@ def _derangement(rng, n: int) -> np.ndarray:
 
 
 def robot_ontology(ontology: Ontology, condition: str, *, house: int) -> Ontology:
-    """The robot's ontology in ``condition`` (module docstring) for house number ``house``."""
+    """The robot's ontology in ``condition`` (module docstring) for house number ``house``.
+
+    Parameters
+    ----------
+    ontology : psgsl_pgm.core.Ontology
+        The world's ontology.
+    condition : str
+        One of :data:`CONDITIONS`: ``"right-ontology"`` (``ontology`` itself), ``"wrong-ontology"`` (the object
+        classes' source probabilities deranged) or ``"no-rooms"`` (without p(o | room)).
+    house : int, keyword-only
+        The house's number; seeds the derangement of ``"wrong-ontology"``, ``default_rng([house, 0x3A0])``.
+
+    Returns
+    -------
+    psgsl_pgm.core.Ontology
+        The robot's ontology.
+
+    Raises
+    ------
+    TypeError
+        ``condition`` is not a string.
+    ValueError
+        ``condition`` is not one of :data:`CONDITIONS`.
+    """
     check_condition(condition)
     if condition == "right-ontology":
         return ontology

@@ -19,7 +19,14 @@ def plot_survival(groups: dict, *, title: str = ""):
     Parameters
     ----------
     groups : dict
-        ``{"<policy>/<variant>": [SearchRun, ...]}``.
+        ``{"<policy>/<variant>": [SearchRun, ...]}``; every run's configuration holds the time budget, s.
+    title : str, default "", keyword-only
+        A line written above the figure's own title; empty: none.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (needs the ``matplotlib`` extra).
     """
     import matplotlib.pyplot as plt
 
@@ -58,6 +65,23 @@ def plot_paths(runs: dict, house, *, title: str = "", floor: float = 1e-6):
     The colour is log10 of the posterior per cell, on one scale for every panel (from ``floor`` to the largest
     value of any panel), with one colour bar; walls are dark grey; the path is white, the start a circle, the
     true source a star.
+
+    Parameters
+    ----------
+    runs : dict
+        ``{"<policy>/<variant>": SearchRun}``, one run per panel (each with its path, (k, 2) m, and its final
+        posterior over the house's cells, (h, w)).
+    house : psgsl_pgm.sim.House
+        The house the runs drove in (its grid places the panels, in m, and draws the walls).
+    title : str, default "", keyword-only
+        The figure's title; empty: none.
+    floor : float, default 1e-6, keyword-only
+        The smallest posterior per cell shown: values below are drawn at ``floor`` (the log scale's lower end).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (needs the ``matplotlib`` extra).
     """
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm

@@ -86,7 +86,35 @@ def findability(world, seed: int = 0, *, found_radius: float | None = None, clea
 def check_findable(world, seed: int = 0, *, found_radius: float | None = None, clearance: float | None = None,
                    sources=None) -> dict:
     """:func:`findability`, refusing (ValueError naming the source and the gap) a source never found, and a source
-    found where the robot starts (a search would end before its first reading: nothing to measure)."""
+    found where the robot starts (a search would end before its first reading: nothing to measure).
+
+    Parameters
+    ----------
+    world : psgsl_pgm.sim.WorldSpec
+        The world (:func:`psgsl_pgm.sim.load_world`).
+    seed : int, default 0
+        The house's seed (only the built-in house varies).
+    found_radius : float, optional, keyword-only
+        m, > 0; a source counts as found within this distance of its found region. Default: the closed loop's,
+        :class:`psgsl_pgm.search.SearchConfig` (0.5 m).
+    clearance : float, optional, keyword-only
+        m, > 0; the robot's cells keep more than this from furniture and windows. Default: the world file's
+        ``clearance`` (0.25 m unless it says otherwise).
+    sources : sequence, optional, keyword-only
+        Source specs (names, classes or positions); default: the world file's ``sources``.
+
+    Returns
+    -------
+    dict
+        :func:`findability`'s result, when every source passes.
+
+    Raises
+    ------
+    ValueError
+        A source is found at the start (within ``found_radius`` of it), or can never be found (no drivable cell
+        within ``found_radius`` of it, or none connected to the start); no cell of the map is drivable; or
+        ``found_radius`` or ``clearance`` is not positive (:func:`findability`).
+    """
     from ._settings import SearchConfig
 
     clearance_used = world.clearance if clearance is None else clearance

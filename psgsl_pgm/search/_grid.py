@@ -86,6 +86,23 @@ def summarize_runs(runs) -> dict:
     calibration of the declared credible region (:func:`psgsl_pgm.experiment._metrics.calibration_summary`);
     ``mean_error`` is the error averaged over the search time (:func:`_time_mean`). ``split`` is the seeds'
     split (:func:`psgsl_pgm.search._split.split_of_seeds`: ``"dev"``, ``"test"`` or ``"mixed"``).
+
+    Parameters
+    ----------
+    runs : iterable of SearchRun
+        The runs of one policy × variant (one per seed), all with the same time budget.
+
+    Returns
+    -------
+    dict
+        The statistics named above, plus ``n_runs``, ``end``, ``success_rate`` (with its 95 % Wilson interval),
+        ``path_ratio``, ``final_error``, ``credible``, ``seeds`` and, for runs not told their gas, the gas
+        statistics (:func:`gas_summary`).
+
+    Raises
+    ------
+    ValueError
+        The runs do not share one time budget, or there is no run.
     """
     runs = list(runs)
     found = np.array([r.succeeded for r in runs])
@@ -231,7 +248,30 @@ def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
     (one entry per ``"<policy>/<variant>"``), ``paired.json`` (only when something is paired), ``runs.csv`` and
     figures; plus ``out/summary.json``
     (``{"<source>/<estimator>": {"<policy>/<variant>": ...}}``) and ``out/runs.csv`` over all of them.
-    ``world`` is the runs' world file (default: the embedded house), whose house the path figures draw."""
+    ``world`` is the runs' world file (default: the embedded house), whose house the path figures draw.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The grid's folder; its runs are read from ``out/runs/*.npz`` (:func:`load_search_run`).
+    figures : bool, default True, keyword-only
+        Also draw ``survival.png`` (:func:`plot_survival`) and ``paths.png`` (:func:`plot_paths`, the runs of
+        the smallest seed) per source × estimator; needs the ``matplotlib`` extra.
+    world : str or os.PathLike, optional, keyword-only
+        The runs' world file, whose house the path figures draw; default: the embedded house.
+
+    Returns
+    -------
+    dict
+        ``{"<source>/<estimator>": {"<policy>/<variant>": summary}}`` (:func:`summarize_runs`), as written to
+        ``out/summary.json``.
+
+    Raises
+    ------
+    ValueError
+        ``out/runs`` holds no run, a file there is not a search run, or the runs of one table do not share one
+        time budget.
+    """
     out = Path(out)
     files = sorted((out / "runs").glob("*.npz"))
     runs = [load_search_run(f) for f in files]
@@ -322,6 +362,57 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
     (:func:`write_search_outputs`). Returns the top-level summary. ``record`` (keyword-only): every run also
     writes its episode beside it, ``runs/<run>.bag/`` (a ROS 2 bag, MCAP storage) and ``runs/<run>.mcap``
     (Foxglove); needs the ``ros`` extra.
+
+    Parameters
+    ----------
+    sources : sequence, default ("oven",)
+        Source specs: object class names, the world file's source names, or (x, y) positions in m (free points
+        of the house).
+    policies : sequence of str, default ("tour", "infotaxis")
+        Policies among :data:`POLICIES`.
+    variants : sequence of str, default ("olfaction", "semantics+rooms")
+        Map variants among :data:`psgsl_pgm.experiment.VARIANTS`.
+    estimators : sequence of str, default ("infotaxis",)
+        Estimators among :data:`psgsl_pgm.experiment.ESTIMATORS`.
+    seeds : iterable of int, default range(10)
+        The house and episode seeds.
+    out : str or os.PathLike, keyword-only
+        The grid's folder (created if missing).
+    workers : int, default 2, keyword-only
+        Worker processes of the local pool.
+    config : psgsl_pgm.experiment.ExperimentConfig, optional, keyword-only
+        The map's and sensors' settings; default ``ExperimentConfig()``.
+    search : SearchConfig, optional, keyword-only
+        The closed loop's settings (time budget, found radius, ...); default ``SearchConfig()``.
+    progress : bool, default True, keyword-only
+        Show a progress bar.
+    figures : bool, default True, keyword-only
+        Draw the figures when aggregating (:func:`write_search_outputs`).
+    grid : sequence of tuple, optional, keyword-only
+        Explicit ``(source, policy, variant, estimator, seed)`` runs, in order, in place of the product.
+    scheduler : str, optional, keyword-only
+        The grid runner's backend: None (a local pool), ``"local"`` (a dask LocalCluster) or a dask scheduler's
+        address.
+    world : str or os.PathLike, optional, keyword-only
+        A world file; default: the embedded house.
+    record : bool, default False, keyword-only
+        Also record each run's episode as a ROS 2 bag and an MCAP file (needs the ``ros`` extra).
+
+    Returns
+    -------
+    dict
+        The top-level summary, ``{"<source>/<estimator>": {"<policy>/<variant>": summary}}``
+        (:func:`write_search_outputs`).
+
+    Raises
+    ------
+    ValueError
+        A policy, variant or estimator is unknown; a list is empty; no run is left (e.g. semantics alone with the
+        ``olfaction`` variant only, or a reactive policy without it); a grid entry is invalid; a source class has
+        no object in the house or a source position is not a free point; the world file is bad; or ``out`` holds
+        runs of another configuration or is in use by another process.
+    psgsl_pgm.runs._runner.GridInterrupted
+        On Ctrl-C, with every finished run on disk.
     """
     config = ExperimentConfig() if config is None else config
     search = SearchConfig() if search is None else search

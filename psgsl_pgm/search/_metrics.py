@@ -119,6 +119,31 @@ def paired_difference(a, b, *, level: float = 0.95) -> dict:
 
     For quantities that are never capped (errors, spreads, areas). Times censored at a budget need
     :func:`psgsl_pgm.search.paired_comparison` (RMST difference, sign-flip test) instead.
+
+    Parameters
+    ----------
+    a, b : (n,) array_like of float
+        The two sides' values, paired by position (run i of ``a`` and of ``b`` share a seed); finite, same shape.
+    level : float, default 0.95, keyword-only
+        The confidence level, in (0, 1) (the key stays ``"ci95"``).
+
+    Returns
+    -------
+    dict
+        ``{"mean": mean of a − b, "ci95": [lo, hi], "n": number of pairs}`` (:func:`psgsl_pgm.experiment.mean_ci`).
+
+    Raises
+    ------
+    ValueError
+        ``a`` and ``b`` differ in shape, hold no pair or a value that is not finite, or ``level`` is outside (0, 1).
+    TypeError
+        ``level`` is not a real number.
+
+    Examples
+    --------
+    >>> d = paired_difference([3.0, 5.0, 4.0], [1.0, 2.0, 3.0])
+    >>> d["mean"], [round(x, 3) for x in d["ci95"]], d["n"]
+    (2.0, [-0.484, 4.484], 3)
     """
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
     if a.shape != b.shape:
@@ -133,6 +158,26 @@ def survival(times, found, grid) -> np.ndarray:
 
     Runs not found stay in for ever. When every run not found is censored at one budget and ``grid`` lies within
     it, this is the Kaplan–Meier estimate (:func:`psgsl_pgm.search.kaplan_meier`, which also gives its bands).
+
+    Parameters
+    ----------
+    times : (n,) array_like of float
+        Each run's time to find the source, s (for a run not found: any value; it is not used).
+    found : (n,) array_like of bool
+        Whether each run found the source.
+    grid : (m,) array_like of float
+        The times at which the fraction is evaluated, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) float64: the fraction of the n runs that have not found the source by each time of ``grid``
+        (a run found at t counts as found from t on).
+
+    Examples
+    --------
+    >>> survival([10.0, 30.0, 50.0], [True, True, False], [0.0, 20.0, 40.0]).round(3).tolist()
+    [1.0, 0.667, 0.333]
     """
     t = np.asarray(times, dtype=np.float64)
     f = np.asarray(found, dtype=bool)

@@ -71,7 +71,34 @@ def mean_hits(distance, *, lambda_over_dx: float, r_dt: float) -> np.ndarray:
 
 
 def hit_probability(distance, *, lambda_over_dx: float, r_dt: float) -> np.ndarray:
-    """P(hit | d) = 1 − exp(−μ(d)) (1 at d = 0, where K0 diverges)."""
+    """P(hit | d) = 1 − exp(−μ(d)) (1 at d = 0, where K0 diverges).
+
+    Parameters
+    ----------
+    distance : array_like of float
+        d, the distance between the agent's and the source's cell centres, in cells (Δx), ≥ 0; any shape.
+    lambda_over_dx : float, keyword-only
+        λ/Δx, the dispersion length scale in cells; must exceed 1/2 (so that ln(2λ/Δx) > 0).
+    r_dt : float, keyword-only
+        R·Δt, the source's emission rate times the sensing time (dimensionless, > 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        P(hit | d), float64 of ``distance``'s shape, in [0, 1].
+
+    Raises
+    ------
+    TypeError
+        ``lambda_over_dx`` or ``r_dt`` is not a real number.
+    ValueError
+        ``lambda_over_dx`` or ``r_dt`` is not positive and finite, or ``lambda_over_dx`` ≤ 1/2.
+
+    Examples
+    --------
+    >>> hit_probability([0.0, 1.0, 5.0], lambda_over_dx=1, r_dt=1).round(4).tolist()
+    [1.0, 0.4552, 0.0053]
+    """
     return -np.expm1(-mean_hits(distance, lambda_over_dx=lambda_over_dx, r_dt=r_dt))
 
 
@@ -81,6 +108,27 @@ def grid_size(*, lambda_over_dx: float, r_dt: float, p_outside: float = 1e-3) ->
     The radial distribution of the source after one hit at the origin, in an unbounded plane, is
     ∝ P(hit | r) · 2πr (annuli of unit width at r = 1, 2, …, 1000 λ/Δx); N = 2 r* + 1 with r* the first radius
     whose disc holds more than 1 − ``p_outside`` of it (OTTO's ``_autoset_Ngrid`` with binary hits).
+
+    Parameters
+    ----------
+    lambda_over_dx : float, keyword-only
+        λ/Δx, the dispersion length scale in cells; must exceed 1/2.
+    r_dt : float, keyword-only
+        R·Δt, the source's emission rate times the sensing time (dimensionless, > 0).
+    p_outside : float, default 1e-3, keyword-only
+        The probability (> 0) the source may keep outside the grid after the first hit.
+
+    Returns
+    -------
+    int
+        N, odd: the grid's side in cells.
+
+    Raises
+    ------
+    TypeError
+        ``lambda_over_dx``, ``r_dt`` or ``p_outside`` is not a real number.
+    ValueError
+        One of them is not positive and finite, or ``lambda_over_dx`` ≤ 1/2.
 
     Examples
     --------

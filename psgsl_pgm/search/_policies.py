@@ -198,12 +198,59 @@ def _wrap(a):
 
 
 def travel_time(drive, turn, *, speed: float, turn_time: float, sense_time: float) -> np.ndarray:
-    """τ = drive / speed + turn_time · abs(turn) / (π/2) + sense_time (s), broadcast over drive and turn."""
+    """τ = drive / speed + turn_time · abs(turn) / (π/2) + sense_time (s), broadcast over drive and turn.
+
+    Parameters
+    ----------
+    drive : array_like of float
+        Distance driven to each pose, m.
+    turn : array_like of float
+        Turn at each pose, rad (its sign does not matter); broadcast with ``drive``.
+    speed : float, keyword-only
+        Driving speed, m/s (> 0).
+    turn_time : float, keyword-only
+        Time of a quarter turn (π/2), s.
+    sense_time : float, keyword-only
+        Time spent sensing at each pose, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        τ, s, float64 of the broadcast shape of ``drive`` and ``turn``.
+
+    Examples
+    --------
+    >>> float(travel_time(2.0, np.pi / 2, speed=0.5, turn_time=2.0, sense_time=1.0))  # 4 + 2 + 1
+    7.0
+    """
     return (np.asarray(drive, dtype=np.float64) / speed + turn_time * np.abs(turn) / (np.pi / 2) + sense_time)
 
 
 def score_per_time(gain, tau) -> np.ndarray:
-    """The pose-scoring rule: G/τ for G > 0, G·τ otherwise (see the module docstring)."""
+    """The pose-scoring rule: G/τ for G > 0, G·τ otherwise (see the module docstring).
+
+    Parameters
+    ----------
+    gain : array_like of float
+        G, each pose's expected gain (e.g. bits of entropy reduced).
+    tau : array_like of float
+        τ, each pose's travel time, s (> 0; :func:`travel_time`); broadcast with ``gain``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The scores, float64 of the broadcast shape (a negative gain scores lower the longer it takes).
+
+    Raises
+    ------
+    ValueError
+        A travel time is not positive.
+
+    Examples
+    --------
+    >>> score_per_time([2.0, -1.0], [4.0, 4.0]).tolist()
+    [0.5, -4.0]
+    """
     gain = np.asarray(gain, dtype=np.float64)
     tau = np.asarray(tau, dtype=np.float64)
     if np.any(tau <= 0):

@@ -47,13 +47,43 @@ def write_search_run(run: SearchRun, fh) -> None:
 
 
 def save_search_run(run: SearchRun, path) -> Path:
-    """Write ``run`` to ``path`` atomically (:func:`psgsl_pgm.runs._runner.atomic_write`)."""
+    """Write ``run`` to ``path`` atomically (:func:`psgsl_pgm.runs._runner.atomic_write`).
+
+    Parameters
+    ----------
+    run : SearchRun
+        The finished closed-loop run (:func:`psgsl_pgm.search.run_closed_loop`).
+    path : str or os.PathLike
+        The ``.npz`` file to write; it appears complete or not at all.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
 
     return atomic_write(path, write_search_run, run)
 
 
 def load_search_run(path) -> SearchRun:
-    """Read a run written by :func:`save_search_run` (ValueError naming the file if it is not one)."""
+    """Read a run written by :func:`save_search_run` (ValueError naming the file if it is not one).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An ``.npz`` file written by :func:`save_search_run` (or by the grid runner, :func:`run_search_grid`).
+        Runs stored before declarations read as runs without one (``end="reach"``).
+
+    Returns
+    -------
+    SearchRun
+        The run, with its configuration.
+
+    Raises
+    ------
+    ValueError
+        The file cannot be read, or is not a search run file (a field is missing or of the wrong kind).
+    """
     path = Path(path)
     try:
         with load_npy(path, str(path)) as z:

@@ -200,10 +200,27 @@ def sign_flip_pvalue(differences, *, n_resamples: int = 100_000, seed: int = 0) 
     sign vectors are drawn with ``numpy.random.default_rng(seed)`` and p = (1 + #) / (1 + n_resamples).
     Sums equal up to rounding (abs(Σ sᵢdᵢ) within 1e-12 relative of the observed) count as ≥.
 
+    Parameters
+    ----------
+    differences : (n,) array_like of float
+        dᵢ, the paired differences (e.g. A − B over seeds); finite, n ≥ 1.
+    n_resamples : int, default 100_000, keyword-only
+        Sign vectors drawn when n > :data:`EXACT_MAX` (≥ 1); unused for the exact test.
+    seed : int, default 0, keyword-only
+        Seed (≥ 0) of the generator drawing them.
+
     Returns
     -------
     dict
         ``{"p_value", "method"}`` (``"exact"`` or ``"monte carlo (N resamples, seed S)"``).
+
+    Raises
+    ------
+    TypeError
+        ``differences`` is not a real numeric array, or ``n_resamples`` or ``seed`` is not an int.
+    ValueError
+        ``differences`` is not 1-D, is empty or holds a value that is not finite; ``n_resamples`` < 1 or
+        ``seed`` < 0.
 
     Examples
     --------
