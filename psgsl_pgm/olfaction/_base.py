@@ -261,14 +261,7 @@ class OlfactoryEstimator(abc.ABC):
         The closed loop's several-source search (:mod:`psgsl_pgm.search._several`) uses it to drop the factors of
         a declared source and remove its region. Same shapes and values as :meth:`condition`.
         """
-        ll = as_float_array(log_likelihood, "log_likelihood", dtype=np.float64)
-        n = self.geometry.shape[0] * self.geometry.shape[1]
-        if ll.size != n or ll.shape not in (self.geometry.shape, (n,)):
-            raise ValueError(f"log_likelihood must have the map's shape {self.geometry.shape} (or ({n},)), "
-                             f"got {ll.shape}")
-        ll = ll.astype(np.float64).ravel()
-        if np.isnan(ll).any() or (ll == np.inf).any():
-            raise ValueError("log_likelihood must be finite or -inf (no NaN, no +inf)")
+        ll = self._as_log_likelihood(log_likelihood)
         if not np.isfinite((self._log_prior + ll)[self.geometry.free.ravel()]).any():
             raise ValueError("log_likelihood rules out every cell the prior allows")
         self._log_other = ll.copy()
