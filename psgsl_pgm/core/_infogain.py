@@ -49,37 +49,40 @@ def semantic_information_gain(
     predictive="paper",
     validate=True,
 ):
-    r"""Expected information about the source from learning each cell's object class, I(S; O_n).
+    r"""Expected information about the source from learning each cell's object class, :math:`I(S; O_n)`.
 
-    .. math:: I(S; O_n) = H(S) - \sum_i p(o_{ni} | \cdot)\, H(S | o_{ni})
+    Eq. (30) of the paper:
 
-    where S's current distribution is the fusion (eq. (11)) of ``olfactory`` with the
-    semantic term of :func:`semantic_source_probability`. The posterior after observing O_n only rescales
-    cell n's weight, which gives all n cells in O(n·k) total (see the module docstring for the formulas).
+    .. math:: I(S; O_n) = H(S) - \sum_i p(o_{ni} \mid z)\, H(S \mid o_{ni})
+
+    where the current distribution of :math:`S` is the fusion (eq. (11)) of ``olfactory`` with the semantic
+    term of :func:`semantic_source_probability`. The posterior after observing :math:`O_n` only rescales cell
+    n's weight, which gives all n cells in O(n·k) total (see the module docstring for the formulas).
 
     Parameters
     ----------
     class_probs : (..., k) array_like
-        p(o_c | z_c), as for :func:`semantic_source_probability`.
+        :math:`p(o_c \mid z_c)`, as for :func:`semantic_source_probability`.
     source_likelihood : (k,) or (m, k) array_like
-        p(o | s) or p(o | s, γ).
+        :math:`p(o \mid s)` or :math:`p(o \mid s, \gamma)`.
     class_prior : (k,) array_like
-        p(o) under which ``class_probs`` were computed.
+        :math:`p(o)` under which ``class_probs`` were computed.
     olfactory : (...) array_like, optional
-        p(s | g) over the same cells; uniform when omitted.
+        :math:`p(s \mid g)` over the same cells; uniform when omitted.
     gas_probs : (m,) array_like, optional
-        p(γ | ζ), required with m > 1 gas rows.
+        :math:`p(\gamma \mid \zeta)`, required with m > 1 gas rows.
     predictive : {"paper", "exact"}
-        ``"paper"`` weights H(S | o_ni) by p(o_ni | z) as the paper writes; ``"exact"`` uses the predictive
-        p(O_n = i | all evidence) = Σ_c P(c) p(o_ni | s_c, z_n), which makes the result the exact mutual
-        information (non-negative; exact in Network A when ``class_prior`` is the background p(o | ¬s)).
+        ``"paper"`` weights :math:`H(S \mid o_{ni})` by :math:`p(o_{ni} \mid z)` as the paper writes;
+        ``"exact"`` uses the predictive :math:`p(O_n = i \mid \text{all evidence}) = \sum_c P(c)\,
+        p(o_{ni} \mid s_c, z_n)`, which makes the result the exact mutual information (non-negative; exact in
+        Network A when ``class_prior`` is the background :math:`p(o \mid \neg s)`).
     validate : bool, default True
         Check ``class_probs`` (see :func:`semantic_source_probability`).
 
     Returns
     -------
     gain : (...) ndarray
-        I(S; O_n) in nats for every cell, float64.
+        :math:`I(S; O_n)` in nats for every cell, float64.
 
     Examples
     --------
