@@ -1,12 +1,13 @@
-"""The robot's class beliefs p(o_c | z_c): a dense map over cells or voxels, updated frame by frame.
+r"""The robot's class beliefs :math:`p(o_c \mid z_c)`: a dense map over cells or voxels, updated frame by frame.
 
-Beliefs start from the class prior p(o) — optionally times the room-category evidence p(o | room)/p(o) of
-:func:`psgsl_pgm.room_evidence` — and every observation of a cell multiplies in its likelihood p(z | o)
-(Bayes' rule, :func:`psgsl_pgm.update_class_probs`; the paper's Z_c | O_c of Sec. "Model"):
+Beliefs start from the class prior :math:`p(o)` — optionally times the room-category evidence
+:math:`p(o \mid \text{room}) / p(o)` of :func:`psgsl_pgm.room_evidence` — and every observation of a cell
+multiplies in its likelihood :math:`p(z \mid o)` (Bayes' rule, :func:`psgsl_pgm.update_class_probs`; the paper's
+:math:`Z_c \mid O_c` of Sec. "Model"):
 
-    p(o_c | z_c, z') ∝ p(o_c | z_c) · p(z' | o_c).
+.. math:: p(o_c \mid z_c, z') \propto p(o_c \mid z_c)\, p(z' \mid o_c).
 
-The map accumulates log p(o_c | z_c) up to a per-cell constant, so that thousands of frames neither
+The map accumulates :math:`\log p(o_c \mid z_c)` up to a per-cell constant, so that thousands of frames neither
 underflow nor lose the ratios between unlikely classes; :attr:`ClassBeliefMap.probs` is kept normalised
 for the cells each frame touches. A voxel map (H, W, L, k) reduces to the 2-D cells of the olfactory grid
 with :meth:`ClassBeliefMap.source_probability` (the paper's Sec. "Voxelized Scene Representations").
