@@ -1,25 +1,27 @@
-"""psgsl_pgm — probabilistic semantic gas source localization (PSGSL).
+r"""psgsl_pgm — probabilistic semantic gas source localization (PSGSL).
 
 The closed-form estimator of Ojeda, Monroy & Gonzalez-Jimenez, *PSGSL: A Probabilistic Framework Integrating
 Semantic Scene Understanding and Gas Sensing for Gas Source Localization*, on full maps:
 
-* :func:`semantic_source_probability` — p(s_c | z) ∝ Σ_i p(o_ci | z_c)/p(o_ci) · p(o_ci | s_c)
+* :func:`semantic_source_probability` —
+  :math:`p(s_c \mid z) \propto \sum_i p(o_{ci} \mid z_c) / p(o_{ci}) \cdot p(o_{ci} \mid s_c)`
   (eq. (20)), with gas mixtures (Sec. "Probabilistic Gas Classification") and voxel
   columns (Sec. "Voxelized Scene Representations");
-* :func:`fuse` — p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z) (eq. (11));
-* :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs p(o_c | z_c);
+* :func:`fuse` — :math:`p(s_c \mid g, z) \propto p(s_c \mid g) \cdot p(s_c \mid z)` (eq. (11));
+* :func:`update_class_probs`, :func:`room_evidence` — building the class beliefs :math:`p(o_c \mid z_c)`;
   :class:`ClassBeliefMap` — the robot's dense class beliefs over cells or voxels, frame by frame;
-* :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — I(S; O_n) and
-  φ_O(p) (Sec. "Information Gain Optimization"); :class:`ViewCache` — the camera's line of sight cast once per
-  cell of a map and reused for every pose;
+* :func:`semantic_information_gain`, :func:`field_of_view`, :func:`view_information_gain` — :math:`I(S; O_n)`
+  and :math:`\varphi_O(p)` (Sec. "Information Gain Optimization"); :class:`ViewCache` — the camera's line of
+  sight cast once per cell of a map and reused for every pose;
 * :class:`GridMap` — the occupancy grid every part of the package shares (frame, cell <-> world, coarsening,
   8-connected free-space graph, the one light-tight line of sight);
-* :class:`Ontology` — p(o | s, γ), p(o) and p(o | room), from YAML, dicts or release counts;
+* :class:`Ontology` — :math:`p(o \mid s, \gamma)`, :math:`p(o)` and :math:`p(o \mid \text{room})`, from YAML,
+  dicts or release counts;
   :func:`kitchen_ontology`, :func:`kitchen_example` — the paper's kitchen example (its ontology; the cells are
   illustrative).
 
 Heavier parts are imported on demand: ``psgsl_pgm.networks`` (pgmpy Bayesian networks),
-``psgsl_pgm.sim`` (simulated house), ``psgsl_pgm.olfaction`` (olfactory estimators p(s | g)),
+``psgsl_pgm.sim`` (simulated house), ``psgsl_pgm.olfaction`` (olfactory estimators :math:`p(s \mid g)`),
 ``psgsl_pgm.experiment`` (the paper's validation experiment), ``psgsl_pgm.teaching`` (notebook helpers).
 """
 

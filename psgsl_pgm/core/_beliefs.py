@@ -19,21 +19,23 @@ __all__ = ["update_class_probs", "room_evidence"]
 
 
 def update_class_probs(class_probs, likelihood):
-    r"""Bayesian update of per-cell class beliefs with an observation likelihood p(z | o).
+    r"""Bayesian update of per-cell class beliefs with an observation likelihood :math:`p(z \mid o)`.
 
-    .. math:: p(o_{ci} | z_c, z') \propto p(o_{ci} | z_c)\, p(z' | o_{ci})
+    For a new observation :math:`z'` of cell c:
+
+    .. math:: p(o_{ci} \mid z_c, z') \propto p(o_{ci} \mid z_c)\, p(z' \mid o_{ci})
 
     Every observation of a cell — a detector's confusion column for the label it reported, "seen, nothing
     detected", or the room-category factor from :func:`room_evidence` — is applied this way. Observations
-    are assumed conditionally independent given the cell's class (the paper's Z_c | O_c).
+    are assumed conditionally independent given the cell's class (the paper's :math:`Z_c \mid O_c`).
 
     Parameters
     ----------
     class_probs : (..., k) array_like
         Current beliefs (each cell sums to 1), or a single (k,) prior to start every cell from.
     likelihood : (k,) or (..., k) array_like
-        p(z | o) for each class, per cell or shared; any positive scale (only ratios matter), broadcastable
-        against ``class_probs``.
+        :math:`p(z \mid o)` for each class, per cell or shared; any positive scale (only ratios matter),
+        broadcastable against ``class_probs``.
 
     Returns
     -------
@@ -98,24 +100,28 @@ def update_class_probs(class_probs, likelihood):
 def room_evidence(room_labels, room_class_table, class_prior):
     r"""Room-category map as evidence on the object classes (Sec. "Model"; "Validation").
 
-    A cell known to lie in room r is an observation Z with likelihood p(r | o) ∝ p(o | r) / p(o). This returns
-    that factor per cell, to be applied with :func:`update_class_probs`; starting from ``class_prior`` it
-    yields exactly p(o | r).
+    A cell known to lie in room r is an observation :math:`Z` with likelihood
+
+    .. math:: p(r \mid o) \propto \frac{p(o \mid r)}{p(o)}.
+
+    This returns that factor per cell, to be applied with :func:`update_class_probs`; starting from
+    ``class_prior`` it yields exactly :math:`p(o \mid r)`.
 
     Parameters
     ----------
     room_labels : (...) array_like of int
         Room index of every cell into the rows of ``room_class_table``; ``-1`` for no room (factor 1).
     room_class_table : (r, k) array_like
-        p(o | room), one distribution over the k classes per room (e.g. ``Ontology.room_table``).
+        :math:`p(o \mid \text{room})`, one distribution over the k classes per room (e.g.
+        ``Ontology.room_table``).
     class_prior : (k,) array_like
-        p(o); positive wherever a room row is.
+        :math:`p(o)`; positive wherever a room row is.
 
     Returns
     -------
     factor : (..., k) ndarray
-        p(o | room_c) / p(o), float64 (a room whose ratios would exceed float64, under a prior near 1e-310,
-        has them scaled to a maximum of 1: the same likelihood).
+        :math:`p(o \mid \text{room}_c) / p(o)`, float64 (a room whose ratios would exceed float64, under a
+        prior near 1e-310, has them scaled to a maximum of 1: the same likelihood).
 
     Examples
     --------

@@ -1,12 +1,13 @@
-"""The robot's class beliefs p(o_c | z_c): a dense map over cells or voxels, updated frame by frame.
+r"""The robot's class beliefs :math:`p(o_c \mid z_c)`: a dense map over cells or voxels, updated frame by frame.
 
-Beliefs start from the class prior p(o) — optionally times the room-category evidence p(o | room)/p(o) of
-:func:`psgsl_pgm.room_evidence` — and every observation of a cell multiplies in its likelihood p(z | o)
-(Bayes' rule, :func:`psgsl_pgm.update_class_probs`; the paper's Z_c | O_c of Sec. "Model"):
+Beliefs start from the class prior :math:`p(o)` — optionally times the room-category evidence
+:math:`p(o \mid \text{room}) / p(o)` of :func:`psgsl_pgm.room_evidence` — and every observation of a cell
+multiplies in its likelihood :math:`p(z \mid o)` (Bayes' rule, :func:`psgsl_pgm.update_class_probs`; the paper's
+:math:`Z_c \mid O_c` of Sec. "Model"):
 
-    p(o_c | z_c, z') ∝ p(o_c | z_c) · p(z' | o_c).
+.. math:: p(o_c \mid z_c, z') \propto p(o_c \mid z_c)\, p(z' \mid o_c).
 
-The map accumulates log p(o_c | z_c) up to a per-cell constant, so that thousands of frames neither
+The map accumulates :math:`\log p(o_c \mid z_c)` up to a per-cell constant, so that thousands of frames neither
 underflow nor lose the ratios between unlikely classes; :attr:`ClassBeliefMap.probs` is kept normalised
 for the cells each frame touches. A voxel map (H, W, L, k) reduces to the 2-D cells of the olfactory grid
 with :meth:`ClassBeliefMap.source_probability` (the paper's Sec. "Voxelized Scene Representations").
@@ -44,7 +45,15 @@ def _class_names(classes) -> tuple[str, ...]:
 
 
 class ClassBeliefMap:
-    """Dense per-cell (or per-voxel) class beliefs p(o_c | z_c).
+    r"""Dense per-cell (or per-voxel) class beliefs :math:`p(o_c \mid z_c)`.
+
+    Beliefs start from the class prior :math:`p(o)` (or the room evidence of :meth:`from_rooms`), and every
+    observation :math:`z'` of a cell multiplies in its likelihood (Bayes' rule, as
+    :func:`psgsl_pgm.update_class_probs`):
+
+    .. math:: p(o_c \mid z_c, z') \propto p(o_c \mid z_c)\, p(z' \mid o_c)
+
+    :meth:`source_probability` turns the beliefs into the semantic term :math:`p(s_c \mid z)`.
 
     Parameters
     ----------
@@ -67,7 +76,7 @@ class ClassBeliefMap:
     ``class_probs``, from ``from_prior(..., chunks=...)`` or from ``from_rooms`` with a dask ``room_labels``
     or ``chunks``, the map never materialises its beliefs: :attr:`probs`, :meth:`most_likely` and
     :meth:`source_probability` return lazy dask arrays chunked over the cells (the voxel columns and the
-    normaliser of p(s | z) are dask reductions, see :mod:`psgsl_pgm.core._dask_arrays`), ready for
+    normaliser of :math:`p(s \mid z)` are dask reductions, see :mod:`psgsl_pgm.core._dask_arrays`), ready for
     :func:`psgsl_pgm.fuse`. The beliefs given are checked chunk by chunk when computed. :meth:`update` and
     :meth:`observe` work as on a numpy map (same log-space arithmetic, same errors, raised at once, the map
     unchanged on error): the first update of a cell reads its row — one compute of the chunks holding the
@@ -126,7 +135,7 @@ class ClassBeliefMap:
     # --- construction ---------------------------------------------------------------------------------------
     @classmethod
     def from_prior(cls, shape, class_prior, classes, *, chunks=None) -> "ClassBeliefMap":
-        """Every cell (voxel) at the class prior p(o).
+        r"""Every cell (voxel) at the class prior :math:`p(o)`.
 
         Parameters
         ----------
@@ -148,14 +157,15 @@ class ClassBeliefMap:
     @classmethod
     def from_rooms(cls, room_labels, room_table, class_prior, classes, *, layers: int | None = None,
                    chunks=None) -> "ClassBeliefMap":
-        """Beliefs conditioned on a room-category map: p(o | room_c) (the prior where the label is -1).
+        r"""Beliefs conditioned on a room-category map: :math:`p(o \mid \text{room}_c)` (the prior where the label
+        is -1).
 
         Parameters
         ----------
         room_labels : (H, W) array_like of int
             Room index into the rows of ``room_table``; -1 = no room evidence.
         room_table : (r, k) array_like
-            p(o | room), rows in the order of the labels, columns in the order of ``classes``.
+            :math:`p(o \mid \text{room})`, rows in the order of the labels, columns in the order of ``classes``.
         class_prior : (k,) array_like
             p(o).
         classes : sequence of str
@@ -309,8 +319,9 @@ class ClassBeliefMap:
 
     # --- the semantic term ----------------------------------------------------------------------------------
     def source_probability(self, source_likelihood, class_prior, **options) -> np.ndarray:
-        """p(s_c | z) over the 2-D cells (eq. (20)); voxel columns are summed (Sec.
-        "Voxelized Scene Representations"). Options as for :func:`psgsl_pgm.semantic_source_probability`."""
+        r""":math:`p(s_c \mid z)` over the 2-D cells (eq. (20)); voxel columns are summed (Sec.
+        "Voxelized Scene Representations", eq. (21): :math:`p(s_c \mid z) = \sum_{v \in c} p(s_v \mid z)`).
+        Options as for :func:`psgsl_pgm.semantic_source_probability`."""
         if self.is_voxel:
             options = {"column_axis": 2} | options
         if self._log is None:  # lazy: the dask path of semantic_source_probability

@@ -15,17 +15,21 @@ __all__ = ["fuse"]
 def fuse(*posteriors, prior=None):
     r"""Combine posteriors over the source cell that used conditionally independent evidence.
 
-    For evidence sets e_1 … e_m independent given S (e.g. olfaction g and semantics z, Sec. "Separating the
-    Semantic and Olfactory Estimation Processes"), each p(s | e_j) ∝ p(e_j | s) p(s), so
+    For evidence sets :math:`e_1, \dots, e_m` independent given :math:`S` (e.g. olfaction :math:`g` and
+    semantics :math:`z`, Sec. "Separating the Semantic and Olfactory Estimation Processes"), each
+    :math:`p(s \mid e_j) \propto p(e_j \mid s)\, p(s)`, so
 
-    .. math:: p(s_c | e_1, \dots, e_m) \propto \frac{\prod_j p(s_c | e_j)}{p(s_c)^{m-1}},
+    .. math:: p(s_c \mid e_1, \dots, e_m) \propto \frac{\prod_j p(s_c \mid e_j)}{p(s_c)^{m-1}}.
 
-    which for a uniform prior and m = 2 is eq. (11),
-    p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z). Computed in linear space by compiled passes that also validate
-    the inputs: for two inputs one pass forms the normaliser and a second writes the result (no temporary);
-    for more, one pass per input builds the product. The cells whose product would leave float64's normal
-    range (below 2^-1000, e.g. 1e-300 · 1e-300) are recomputed in log space, so the result is exact to
-    round-off for any number of cells or inputs and never NaN.
+    For a uniform prior and :math:`m = 2` this is eq. (11) of the paper:
+
+    .. math:: p(s_c \mid g, z) \propto p(s_c \mid g) \cdot p(s_c \mid z)
+
+    Computed in linear space by compiled passes that also validate the inputs: for two inputs one pass forms
+    the normaliser and a second writes the result (no temporary); for more, one pass per input builds the
+    product. The cells whose product would leave float64's normal range (below :math:`2^{-1000}`, e.g.
+    1e-300 · 1e-300) are recomputed in log space, so the result is exact to round-off for any number of cells
+    or inputs and never NaN.
 
     Parameters
     ----------
@@ -33,7 +37,7 @@ def fuse(*posteriors, prior=None):
         Two or more distributions over the same cells (same shape, each sums to 1), all computed under the
         same source prior. One input is returned normalised.
     prior : (...) array_like, optional
-        That source prior p(s); uniform when omitted. Must be positive wherever a posterior is.
+        That source prior :math:`p(s)`; uniform when omitted. Must be positive wherever a posterior is.
 
     Returns
     -------

@@ -25,20 +25,29 @@ __all__ = ["GasBelief"]
 
 
 class GasBelief:
-    """p(γ | ζ_1:t) over ``gases``, updated by classified readings (module docstring).
+    r""":math:`p(\gamma \mid \zeta_{1:t})` over ``gases``, updated by classified readings.
+
+    An electronic nose names a gas :math:`\zeta_u` at each reading u; :math:`b_u` is the bin of the reading's
+    strength (weak readings classify worse). Given the gas, the readings' classification errors are
+    independent, so
+
+    .. math:: p(\gamma \mid \zeta_{1:t}) \propto p(\gamma) \prod_{u \le t} p(\zeta_u \mid \gamma, b_u).
+
+    A reading the device does not classify changes nothing. The belief is the weight ``gas_probs`` of the
+    gas mixture of :func:`psgsl_pgm.semantic_source_probability` (eq. (27) of the paper).
 
     Parameters
     ----------
     gases : sequence of str
         The gases γ, in the order of ``confusion``'s rows and columns.
     confusion : (B, m, m) array_like
-        p(ζ | γ, b): ``confusion[b, g, z]`` the probability that a reading of strength bin b of gas g is named z;
-        every row ``confusion[b, g]`` sums to one.
+        :math:`p(\zeta \mid \gamma, b)`: ``confusion[b, g, z]`` the probability that a reading of strength bin
+        b of gas g is named z; every row ``confusion[b, g]`` sums to one.
     edges : (B + 1,) array_like
         Increasing strength-bin edges (the e-nose's response units); a reading of strength s is in bin b when
         ``edges[b] <= s < edges[b + 1]`` (the last edge may be ``inf``).
     prior : (m,) array_like, optional
-        p(γ); uniform when omitted.
+        :math:`p(\gamma)`; uniform when omitted.
 
     Examples
     --------
@@ -76,7 +85,7 @@ class GasBelief:
 
     @property
     def probs(self) -> np.ndarray:
-        """(m,) p(γ | ζ_1:t), float64, summing to one."""
+        r"""(m,) :math:`p(\gamma \mid \zeta_{1:t})`, float64, summing to one."""
         a = self._log - self._log.max()
         p = np.exp(a)
         return p / p.sum()
@@ -87,7 +96,8 @@ class GasBelief:
         return min(max(b, 0), len(self.edges) - 2)
 
     def likelihood(self, label, strength: float) -> np.ndarray:
-        """(m,) p(ζ = ``label`` | γ, b(strength)) for every γ; ones for ``label`` None."""
+        r"""(m,) :math:`p(\zeta = \text{label} \mid \gamma, b(\text{strength}))` for every γ; ones for ``label``
+        None."""
         if label is None:
             return np.ones(len(self.gases))
         if label not in self.gases:

@@ -1,22 +1,32 @@
-r"""Semantic information gain I(S; O_n) for every cell at once (Sec. "Information Gain Optimization").
+r"""Semantic information gain :math:`I(S; O_n)` for every cell at once (Sec. "Information Gain Optimization").
 
 Derivation (checked in ``proofs/check_information_gain.py``). Let the current source distribution be the
-fusion P(c) = f_c w_c / U of an olfactory posterior f with the semantic weights w_c = q_c · ρ
-(eq. (20), ρ from :mod:`psgsl_pgm.core._ratios`), U = Σ_c f_c w_c. Learning O_n = i removes
-cell n's uncertain factor: in Network A, p(O_n = i, z_n | S = c) / p(z_n | ¬s_n) is q_ni for c ≠ n and
-q_ni ρ_i for c = n, so *only cell n's weight changes*, from f_n w_n to f_n ρ_i. With a_n = f_n / U and
+fusion :math:`P(c) = f_c w_c / U` of an olfactory posterior f with the semantic weights :math:`w_c = q_c \cdot \rho`
+(eq. (20), ρ from :mod:`psgsl_pgm.core._ratios`), :math:`U = \sum_c f_c w_c`. Learning :math:`O_n = i` removes
+cell n's uncertain factor: in Network A, :math:`p(O_n = i, z_n \mid S = c) / p(z_n \mid \neg s_n)` is
+:math:`q_{ni}` for c ≠ n and :math:`q_{ni} \rho_i` for c = n, so *only cell n's weight changes*, from
+:math:`f_n w_n` to :math:`f_n \rho_i`. With :math:`a_n = f_n / U`, :math:`P_n = a_n w_n` and the new normaliser
 
-    x_ni = a_n (ρ_i − w_n),   Z_ni = 1 + x_ni   (the new normaliser; P_n = a_n w_n),
+.. math:: x_{ni} = a_n (\rho_i - w_n), \qquad Z_{ni} = 1 + x_{ni},
 
-the posterior after O_n = i has entropy H_ni = [B_n − a_n ρ_i log(a_n ρ_i)] / Z_ni + log Z_ni with
-B_n = H(S) + P_n log P_n, and the exact predictive is p(O_n = i | all) = q_ni Z_ni. Hence
+the posterior after :math:`O_n = i` has entropy
 
-* exact:  I(S; O_n) = a_n (v_n − w_n log w_n) − Σ_i q_ni φ(x_ni),  φ(x) = (1+x) log(1+x) − x,
-  v_n = Σ_i q_ni ρ_i log ρ_i (both terms ≥ 0 by Jensen; H(S) drops out);
-* paper:  H(S) − Σ_i q_ni H_ni (the paper weights H(S | o_ni) by p(o_ni | z) = q_ni).
+.. math:: H_{ni} = \frac{B_n - a_n \rho_i \log(a_n \rho_i)}{Z_{ni}} + \log Z_{ni},
+          \qquad B_n = H(S) + P_n \log P_n,
 
-For most cells |x_ni| is tiny (a_n ~ 1/n), and both sums expand in the central moments
-μ_j = Σ_i q_ni (ρ_i − w_n)^j and ν_j = Σ_i q_ni ρ_i log ρ_i (ρ_i − w_n)^j, which one compiled pass over
+and the exact predictive is :math:`p(O_n = i \mid \text{all}) = q_{ni} Z_{ni}`. Hence
+
+* exact (both terms ≥ 0 by Jensen; H(S) drops out):
+
+  .. math:: I(S; O_n) = a_n (v_n - w_n \log w_n) - \sum_i q_{ni}\, \phi(x_{ni}),
+            \qquad \phi(x) = (1 + x) \log(1 + x) - x, \qquad v_n = \sum_i q_{ni} \rho_i \log \rho_i;
+
+* paper: :math:`H(S) - \sum_i q_{ni} H_{ni}` (the paper weights :math:`H(S \mid o_{ni})` by
+  :math:`p(o_{ni} \mid z) = q_{ni}`).
+
+For most cells :math:`|x_{ni}|` is tiny (:math:`a_n \sim 1/n`), and both sums expand in the central moments
+:math:`\mu_j = \sum_i q_{ni} (\rho_i - w_n)^j` and :math:`\nu_j = \sum_i q_{ni} \rho_i \log \rho_i (\rho_i - w_n)^j`,
+which one compiled pass over
 the beliefs computes directly (:func:`psgsl_pgm.kernels._belief.belief_moments`: each row read once, the moments
 taken about w_n while the row is in cache — no raw-moment cancellation). Cells where the series would
 converge slowly are computed element-wise from their row. Total cost O(n·k); no per-cell recomputation of the posterior (which is O(n²·k)).
@@ -49,37 +59,40 @@ def semantic_information_gain(
     predictive="paper",
     validate=True,
 ):
-    r"""Expected information about the source from learning each cell's object class, I(S; O_n).
+    r"""Expected information about the source from learning each cell's object class, :math:`I(S; O_n)`.
 
-    .. math:: I(S; O_n) = H(S) - \sum_i p(o_{ni} | \cdot)\, H(S | o_{ni})
+    Eq. (30) of the paper:
 
-    where S's current distribution is the fusion (eq. (11)) of ``olfactory`` with the
-    semantic term of :func:`semantic_source_probability`. The posterior after observing O_n only rescales
-    cell n's weight, which gives all n cells in O(n·k) total (see the module docstring for the formulas).
+    .. math:: I(S; O_n) = H(S) - \sum_i p(o_{ni} \mid z)\, H(S \mid o_{ni})
+
+    where the current distribution of :math:`S` is the fusion (eq. (11)) of ``olfactory`` with the semantic
+    term of :func:`semantic_source_probability`. The posterior after observing :math:`O_n` only rescales cell
+    n's weight, which gives all n cells in O(n·k) total (see the module docstring for the formulas).
 
     Parameters
     ----------
     class_probs : (..., k) array_like
-        p(o_c | z_c), as for :func:`semantic_source_probability`.
+        :math:`p(o_c \mid z_c)`, as for :func:`semantic_source_probability`.
     source_likelihood : (k,) or (m, k) array_like
-        p(o | s) or p(o | s, γ).
+        :math:`p(o \mid s)` or :math:`p(o \mid s, \gamma)`.
     class_prior : (k,) array_like
-        p(o) under which ``class_probs`` were computed.
+        :math:`p(o)` under which ``class_probs`` were computed.
     olfactory : (...) array_like, optional
-        p(s | g) over the same cells; uniform when omitted.
+        :math:`p(s \mid g)` over the same cells; uniform when omitted.
     gas_probs : (m,) array_like, optional
-        p(γ | ζ), required with m > 1 gas rows.
+        :math:`p(\gamma \mid \zeta)`, required with m > 1 gas rows.
     predictive : {"paper", "exact"}
-        ``"paper"`` weights H(S | o_ni) by p(o_ni | z) as the paper writes; ``"exact"`` uses the predictive
-        p(O_n = i | all evidence) = Σ_c P(c) p(o_ni | s_c, z_n), which makes the result the exact mutual
-        information (non-negative; exact in Network A when ``class_prior`` is the background p(o | ¬s)).
+        ``"paper"`` weights :math:`H(S \mid o_{ni})` by :math:`p(o_{ni} \mid z)` as the paper writes;
+        ``"exact"`` uses the predictive :math:`p(O_n = i \mid \text{all evidence}) = \sum_c P(c)\,
+        p(o_{ni} \mid s_c, z_n)`, which makes the result the exact mutual information (non-negative; exact in
+        Network A when ``class_prior`` is the background :math:`p(o \mid \neg s)`).
     validate : bool, default True
         Check ``class_probs`` (see :func:`semantic_source_probability`).
 
     Returns
     -------
     gain : (...) ndarray
-        I(S; O_n) in nats for every cell, float64.
+        :math:`I(S; O_n)` in nats for every cell, float64.
 
     Examples
     --------

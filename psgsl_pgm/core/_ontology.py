@@ -21,7 +21,7 @@ _KEYS = {"classes", "class_prior", "gases", "rooms"}
 
 
 class Ontology:
-    """Object classes, gas types and the probabilities that relate them.
+    r"""Object classes, gas types and the probabilities that relate them.
 
     Parameters
     ----------
@@ -29,17 +29,17 @@ class Ontology:
         Object class names; :data:`OTHER` ("other") is appended when absent — it stands for everything not
         listed (including empty floor), so k = len(classes) (+1).
     gases : sequence of str
-        Gas (smell) names γ.
+        Gas (smell) names :math:`\gamma`.
     source_table : (m, k) array_like
-        p(o | s, γ): row γ is the distribution of the source object's class for gas γ.
+        :math:`p(o \mid s, \gamma)`: row γ is the distribution of the source object's class for gas γ.
     class_prior : (k,) array_like, optional
-        p(o), the prior of a cell's class before observing it; uniform when omitted. It is the prior under
-        which a semantic map's beliefs are computed; when it equals the background p(o | ¬s) the closed form
-        is exact (see :func:`psgsl_pgm.semantic_source_probability`).
+        :math:`p(o)`, the prior of a cell's class before observing it; uniform when omitted. It is the prior
+        under which a semantic map's beliefs are computed; when it equals the background
+        :math:`p(o \mid \neg s)` the closed form is exact (see :func:`psgsl_pgm.semantic_source_probability`).
     rooms : sequence of str, optional
         Room-category names.
     room_table : (r, k) array_like, optional
-        p(o | room), one row per room.
+        :math:`p(o \mid \text{room})`, one row per room.
 
     Examples
     --------
@@ -126,24 +126,31 @@ class Ontology:
         return _lookup({r: i for i, r in enumerate(self._rooms)}, name, "room")
 
     def source_likelihood(self, gas=None, *, off_ontology: float = 0.0) -> np.ndarray:
-        r"""p(o | s, γ) for one gas name, (k,); for a list of names, (len, k); for ``None`` all gases, (m, k).
+        r""":math:`p(o \mid s, \gamma)` for one gas name, (k,); for a list of names, (len, k); for ``None`` all
+        gases, (m, k).
 
         Parameters
         ----------
         gas : str, list of str or None
         off_ontology : float in [0, 1], keyword-only
-            ε, the probability that a source is *off the ontology*: emitted by whatever is in its cell, the
-            cell's object then following the background p(o | ¬s) = :attr:`class_prior` as any other cell's
-            does. Marginalising that latent choice out of the source cell's CPD gives
+            :math:`\varepsilon`, the probability that a source is *off the ontology*: emitted by whatever is in
+            its cell, the cell's object then following the background :math:`p(o \mid \neg s)` =
+            :attr:`class_prior` as any other cell's does. Marginalising that latent choice out of the source
+            cell's CPD gives
 
-            .. math:: p_\varepsilon(o_{ci} | s_c, \gamma) = (1 - \varepsilon)\, p(o_{ci} | s_c, \gamma)
-                      + \varepsilon\, p(o_{ci} | \neg s_c),
+            .. math:: p_\varepsilon(o_{ci} \mid s_c, \gamma) = (1 - \varepsilon)\, p(o_{ci} \mid s_c, \gamma)
+                      + \varepsilon\, p(o_{ci} \mid \neg s_c),
 
-            so eq. (20) with this likelihood is exact for the mixture (in Network A with
-            background β = :attr:`class_prior`, as without ε). The semantic weight of a cell becomes
-            (1 − ε) Σ_i p(o_ci | z_c) p(o_ci | s_c) / p(o_ci) + ε: no cell falls below ε times the weight of a
-            cell the camera has not seen, so an object-free source cell keeps mass that the gas can raise.
-            0 (the default): the ontology as it stands.
+            so eq. (20) with this likelihood is exact for the mixture (in Network A with background
+            :math:`\beta` = :attr:`class_prior`, as without :math:`\varepsilon`). The semantic weight of a cell
+            becomes
+
+            .. math:: (1 - \varepsilon) \sum_i \frac{p(o_{ci} \mid z_c)}{p(o_{ci})}\, p(o_{ci} \mid s_c)
+                      + \varepsilon,
+
+            so no cell falls below :math:`\varepsilon` times the weight of a cell the camera has not seen: an
+            object-free source cell keeps mass that the gas can raise. 0 (the default): the ontology as it
+            stands.
 
         Examples
         --------
@@ -167,10 +174,15 @@ class Ontology:
         return self._room_table[self.room_index(room)].copy()
 
     def marginal_class_prior(self, n_cells: int, gas=None) -> np.ndarray:
-        """p(o_n) = p(s_n) p(o | s) + p(¬s_n) p(o | ¬s) under a uniform source prior p(s_n) = 1/n_cells.
+        r"""The marginal class prior :math:`p(o_n)` of a cell under a uniform source prior.
 
-        Uses :attr:`class_prior` as the background p(o | ¬s). With this prior instead of the background,
-        the closed form is the paper's approximation p(o_ni | s_c) ≈ p(o_ni).
+        Eq. (17) of the paper, with :math:`p(s_n) = 1 / n_\text{cells}` and :attr:`class_prior` as the
+        background :math:`p(o \mid \neg s)`:
+
+        .. math:: p(o_n) = p(s_n)\, p(o \mid s) + p(\neg s_n)\, p(o \mid \neg s)
+
+        With this prior instead of the background, the closed form is the paper's approximation
+        :math:`p(o_{ni} \mid s_c) \simeq p(o_{ni})` (eq. (18)).
         """
         if isinstance(n_cells, (bool, np.bool_)) or not isinstance(n_cells, (int, np.integer)) or n_cells < 1:
             raise ValueError(f"n_cells must be a positive int, got {n_cells!r}")

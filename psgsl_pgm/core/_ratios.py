@@ -1,13 +1,16 @@
-"""The ontology side of the semantic term: validated p(o | s, γ), p(γ | ζ) and p(o), reduced to one k-vector.
+r"""The ontology side of the semantic term: validated :math:`p(o \mid s, \gamma)`, :math:`p(\gamma \mid \zeta)` and
+:math:`p(o)`, reduced to one k-vector.
 
 Eq. (20) and its gas-mixture form (Sec. "Probabilistic Gas Classification") are linear in
 the class beliefs:
 
-    p(s_c | z, ζ) ∝ Σ_γ p(γ | ζ) Σ_i p(o_ci | z_c) / p(o_ci) · p(o_ci | s_c, γ) = p(o_c | z_c) · ρ
+.. math:: p(s_c \mid z, \zeta) \propto \sum_\gamma p(\gamma \mid \zeta) \sum_i \frac{p(o_{ci} \mid z_c)}{p(o_{ci})}\,
+          p(o_{ci} \mid s_c, \gamma) = p(o_c \mid z_c) \cdot \rho
 
-with the *class ratio* ρ_i = Σ_γ p(γ | ζ) p(o_i | s, γ) / p(o_i). Everything per cell is then a dot product
-with ρ; this module builds and validates ρ once. :func:`likelihood_ratio` is the division p(o | ·) / p(o) itself,
-for ρ and for the room evidence p(o | room) / p(o).
+with the *class ratio* :math:`\rho_i = \sum_\gamma p(\gamma \mid \zeta)\, p(o_i \mid s, \gamma) / p(o_i)`.
+Everything per cell is then a dot product with ρ; this module builds and validates ρ once.
+:func:`likelihood_ratio` is the division :math:`p(o \mid \cdot) / p(o)` itself, for ρ and for the room evidence
+:math:`p(o \mid \text{room}) / p(o)`.
 """
 
 from __future__ import annotations

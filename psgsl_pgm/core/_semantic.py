@@ -25,36 +25,47 @@ def semantic_source_probability(
     source_prior=None,
     validate=True,
 ):
-    r"""Probability of the source being in each cell given the semantic map alone, p(s_c | z).
+    r"""Probability of the source being in each cell given the semantic map alone, :math:`p(s_c \mid z)`.
 
-    Implements eq. (20),
+    Eq. (20) of the paper:
 
-    .. math:: p(s_c | z) \propto \sum_i \frac{p(o_{ci} | z_c)}{p(o_{ci})}\, p(o_{ci} | s_c),
+    .. math:: p(s_c \mid z) \propto \sum_i \frac{p(o_{ci} \mid z_c)}{p(o_{ci})}\, p(o_{ci} \mid s_c)
 
-    with the gas-mixture form of Sec. "Probabilistic Gas Classification" when ``gas_probs`` is given,
-    :math:`p(s_c | z, \zeta) \propto \sum_\gamma p(\gamma|\zeta) \sum_i p(o_{ci}|z_c)/p(o_{ci})\,
-    p(o_{ci}|s_c,\gamma)`, and the column sum of Sec. "Voxelized Scene Representations" when ``column_axis``
-    is given. Cost: one matrix-vector product, O(k) per cell.
+    When ``gas_probs`` is given, the gas-mixture form of Sec. "Probabilistic Gas Classification", eq. (27) of
+    the paper:
 
-    **Exactness.** In the paper's Network A with background distribution p(o | ¬s) = β, the result is
-    *exact* when ``class_prior`` = β and ``class_probs`` are the beliefs computed under β: the product over
-    the other cells, Π_{n≠c} p(z_n | ¬s_n), is the same constant for every candidate c. The same holds for
-    the gas mixture when β does not depend on γ (then ``gas_probs`` = p(γ | ζ) is the right weight). With
-    ``class_prior`` = the marginal p(o) = p(s_n) p(o | s) + p(¬s_n) β, it is the paper's approximation
-    p(o_ni | s_c) ≈ p(o_ni), whose error vanishes as the number of cells grows (p(s_n) = 1/n).
+    .. math:: p(s_c \mid z, \zeta) \propto \sum_\gamma p(\gamma \mid \zeta)
+              \sum_i \frac{p(o_{ci} \mid z_c)}{p(o_{ci})}\, p(o_{ci} \mid s_c, \gamma)
+
+    When ``column_axis`` is given, the column sum of Sec. "Voxelized Scene Representations", eq. (21) of the
+    paper:
+
+    .. math:: p(s_c \mid z) = \sum_{v \in c} p(s_v \mid z)
+
+    Cost: one matrix-vector product, O(k) per cell.
+
+    **Exactness.** In the paper's Network A with background distribution :math:`p(o \mid \neg s) = \beta`, the
+    result is *exact* when ``class_prior`` = β and ``class_probs`` are the beliefs computed under β: the
+    product over the other cells, :math:`\prod_{n \ne c} p(z_n \mid \neg s_n)`, is the same constant for every
+    candidate c. The same holds for the gas mixture when β does not depend on γ (then ``gas_probs`` =
+    :math:`p(\gamma \mid \zeta)` is the right weight). With ``class_prior`` = the marginal
+    :math:`p(o) = p(s_n)\, p(o \mid s) + p(\neg s_n)\, \beta`, it is the paper's approximation
+    :math:`p(o_{ni} \mid s_c) \simeq p(o_{ni})`, whose error vanishes as the number of cells grows
+    (:math:`p(s_n) = 1/n`).
 
     Parameters
     ----------
     class_probs : (..., k) array_like
-        p(o_c | z_c): per-cell class beliefs (cells on the leading axes — a list, a 2-D grid or a 3-D voxel
-        grid — and the k classes last). float32 input gives float32 output.
+        :math:`p(o_c \mid z_c)`: per-cell class beliefs (cells on the leading axes — a list, a 2-D grid or a
+        3-D voxel grid — and the k classes last). float32 input gives float32 output.
     source_likelihood : (k,) or (m, k) array_like
-        p(o | s) from the ontology, or p(o | s, γ) for m gas types.
+        :math:`p(o \mid s)` from the ontology, or :math:`p(o \mid s, \gamma)` for m gas types.
     class_prior : (k,) array_like
-        p(o), the prior under which ``class_probs`` were computed. Must be positive wherever
+        :math:`p(o)`, the prior under which ``class_probs`` were computed. Must be positive wherever
         ``source_likelihood`` or ``class_probs`` is.
     gas_probs : (m,) array_like, optional
-        p(γ | ζ), the gas classifier's belief; required with an (m, k) ``source_likelihood``, m > 1.
+        :math:`p(\gamma \mid \zeta)`, the gas classifier's belief; required with an (m, k)
+        ``source_likelihood``, m > 1.
     column_axis : int, optional
         A cell axis (counted among the leading axes of ``class_probs``, negative from the last cell axis)
         to sum over: voxels → 2-D columns.
@@ -62,9 +73,9 @@ def semantic_source_probability(
         Return a distribution over cells; ``False`` returns the unnormalised weights (scaled so that the
         largest possible per-cell weight is 1), for composition.
     source_prior : (...) array_like, optional
-        p(s) over the cells of ``class_probs`` (before any column sum); uniform when omitted. The result is
-        then the posterior under that prior, p(s_c | z) ∝ p(s_c) p(z | s_c), ready for :func:`fuse` with
-        ``prior=source_prior``.
+        :math:`p(s)` over the cells of ``class_probs`` (before any column sum); uniform when omitted. The
+        result is then the posterior under that prior, :math:`p(s_c \mid z) \propto p(s_c)\, p(z \mid s_c)`,
+        ready for :func:`fuse` with ``prior=source_prior``.
     validate : bool, default True
         Check ``class_probs`` (finite, non-negative, normalised to :data:`psgsl_pgm._shared._validate.SUM_RTOL`).
         Only switch off for beliefs that were already checked.

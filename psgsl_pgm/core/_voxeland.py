@@ -20,8 +20,8 @@ def voxeland_column_weights(data, classes, *, grid, class_prior, source_likeliho
                             block_bytes: int = 64 << 20) -> np.ndarray:
     r"""The unnormalised semantic term of a Voxeland map's columns, in memory bounded by the grid.
 
-    The column sum of Sec. "Voxelized Scene Representations", :math:`p(s_c | z) \propto \sum_{v \in c}
-    \sum_i p(o_{vi} | z_v) / p(o_i)\, p(o_i | s_v)` (eq. 20 summed over a column), equal to
+    The column sum of Sec. "Voxelized Scene Representations", :math:`p(s_c \mid z) \propto \sum_{v \in c}
+    \sum_i p(o_{vi} \mid z_v) / p(o_i)\, p(o_i \mid s_v)` (eq. (20) summed over a column, eq. (21)), equal to
     ``semantic_source_probability(voxeland_class_beliefs(...), ..., column_axis=2, normalize=False)`` without
     building the (H, W, L, k) array: columns no box reaches hold L prior voxels (one weight, computed once);
     the rows that boxes reach are computed a block of rows at a time.

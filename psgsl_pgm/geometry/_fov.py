@@ -24,7 +24,7 @@ def _occupancy(occupancy) -> np.ndarray:
 
 
 def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, resolution=1.0, origin=(0.0, 0.0)):
-    """Cells seen by a camera at ``pose``: the set F_p of Sec. "Information Gain Optimization".
+    r"""Cells seen by a camera at ``pose``: the set :math:`F_p` of Sec. "Information Gain Optimization".
 
     A cell is visible when its centre lies within ``[min_range, max_range]`` of the camera and within
     ``half_angle`` of its heading, and the segment from the centre of the camera's cell to that centre
@@ -286,19 +286,20 @@ class ViewCache:
         return rows[keep], cols[keep]
 
     def field_of_view(self, pose) -> np.ndarray:
-        """F_p as an (H, W) bool mask, equal to :func:`field_of_view` with this cache's camera."""
+        r""":math:`F_p` as an (H, W) bool mask, equal to :func:`field_of_view` with this cache's camera."""
         _, (cam,) = self._cameras(_pose(pose))
         seen = np.zeros(self.occupancy.shape, dtype=bool)
         seen[self.in_view(cam)] = True
         return seen
 
     def information_gain(self, information_gain, pose):
-        """φ_O(p) = Σ_{n ∈ F_p} I(S; O_n) for one pose or each of P poses (see :func:`view_information_gain`).
+        r""":math:`\varphi_O(p) = \sum_{n \in F_p} I(S; O_n)` for one pose or each of P poses (see
+        :func:`view_information_gain`).
 
         Parameters
         ----------
         information_gain : (H, W) array_like
-            I(S; O_n) per cell, finite.
+            :math:`I(S; O_n)` per cell, finite.
         pose : (3,) or (P, 3) array_like
 
         Returns
@@ -324,12 +325,17 @@ class ViewCache:
 
 
 def view_information_gain(information_gain, occupancy, pose, **fov):
-    """Semantic information gain of a camera pose, φ_O(p) = Σ_{n ∈ F_p} I(S; O_n).
+    r"""Semantic information gain of a camera pose, :math:`\varphi_O(p)`.
+
+    Eq. (31) of the paper: the information gains of the cells in the camera's field of view :math:`F_p`
+    (:func:`field_of_view`) at pose :math:`p`, summed,
+
+    .. math:: \varphi_O(p) = \sum_{n \in F_p} I(S; O_n)
 
     Parameters
     ----------
     information_gain : (H, W) array_like
-        I(S; O_n) per cell, e.g. from :func:`semantic_information_gain`.
+        :math:`I(S; O_n)` per cell, e.g. from :func:`semantic_information_gain`.
     occupancy : (H, W) array_like of bool
         As for :func:`field_of_view`.
     pose : (3,) or (P, 3) array_like
@@ -340,7 +346,7 @@ def view_information_gain(information_gain, occupancy, pose, **fov):
     Returns
     -------
     phi : float or (P,) ndarray
-        φ_O for the pose, or for each candidate pose.
+        :math:`\varphi_O` for the pose, or for each candidate pose.
 
     Notes
     -----

@@ -1,12 +1,12 @@
-"""Olfactory estimators p(s | g) of the gas source location from hit/miss readings.
+r"""Olfactory estimators :math:`p(s \mid g)` of the gas source location from hit/miss readings.
 
 The estimators share one interface (:class:`OlfactoryEstimator`: ``update(position, hit, wind)``,
 ``posterior``, ``reset()``) and one plume model (:class:`PlumeModel`: steady advection-diffusion on the
 occupancy grid (:class:`psgsl_pgm.GridMap`) with no-flux walls, absorbing outlets and the map's wind field, solved once with a sparse LU
 factorisation; Green's functions for all candidate sources from one adjoint solve per sensor cell):
 
-* :class:`GridInfotaxis` — Bayesian hit/miss posterior with Poisson encounters, P(hit | s) = 1 − exp(−κ G)
-  (Vergassola et al. 2007), tempered against correlated readings;
+* :class:`GridInfotaxis` — Bayesian hit/miss posterior with Poisson encounters,
+  :math:`P(\text{hit} \mid s) = 1 - e^{-\kappa G}` (Vergassola et al. 2007), tempered against correlated readings;
 * :class:`PMFSEstimator` — the PMFS family (the paper's baseline, Sec. "Validation"): a hit-probability map
   with confidence compared with the hit map each candidate source would produce;
 * :class:`FilamentPMFS` — PMFS as published (Ojeda et al. 2024): a GMRF wind map from the anemometer
@@ -15,10 +15,11 @@ factorisation; Green's functions for all candidate sources from one adjoint solv
 * :class:`GrGSL` — MAPIR's grid-based GSL (Ojeda et al. 2021): upwind after a hit, towards the last hit after a
   miss, propagated over the free space;
 * :class:`ParticleFilter` — sequential importance resampling over the source's position and release rate on the
-  same likelihood as :class:`GridInfotaxis`, p(s | g) the particles' weight per cell.
+  same likelihood as :class:`GridInfotaxis`, :math:`p(s \mid g)` the particles' weight per cell.
 
-Every posterior is the olfactory factor of eq. (11), p(s_c | g, z) ∝ p(s_c | g) p(s_c | z),
-and is combined with the semantic term by :func:`psgsl_pgm.fuse`.
+Every posterior is the olfactory factor of eq. (11),
+:math:`p(s_c \mid g, z) \propto p(s_c \mid g)\, p(s_c \mid z)`, and is combined with the semantic term by
+:func:`psgsl_pgm.fuse`.
 
 Hits are the robot's decision from its sensor's output (:class:`HitRule`: the rate of rise for a metal-oxide
 sensor, the baseline-subtracted level for a fast one, each estimated online from the robot's own readings).

@@ -53,27 +53,33 @@ def _as_hit(hit) -> bool:
 
 
 class OlfactoryEstimator(abc.ABC):
-    """Posterior p(s | g) over the cells of a map, updated one reading at a time.
+    r"""Posterior :math:`p(s \mid g)` over the cells of a map, updated one reading at a time.
 
     The posterior covers every cell of the (H, W) map, is exactly zero on occupied cells, sums to one and is
     kept internally as a log posterior (log-likelihood accumulation, ``logsumexp`` normalisation). It is the
-    olfactory factor of eq. (11), p(s_c | g, z) ∝ p(s_c | g) · p(s_c | z), to be fused
-    with the semantic term by :func:`psgsl_pgm.fuse`.
+    olfactory factor of eq. (11) of the paper, to be fused with the semantic term by :func:`psgsl_pgm.fuse`:
 
-    The bookkeeping of p(s | g) lives here, once for every estimator: the prior in log space (normalised,
-    −inf on occupied cells), the posterior log p(s) + log L(s) + Σ log P(F̄ | s) − log Z normalised with
-    ``logsumexp`` when first read, the "not found" factors of :meth:`condition` kept through later readings, and
-    the checks that no update leaves every cell at probability zero. Subclasses implement :meth:`_propose` (the
-    log-likelihood log L(s) of every reading so far, after one more, without changing state) and :meth:`_accept`
-    (commit it); :meth:`update` rejects a reading that would leave no cell with positive probability
-    (ValueError, state unchanged), so the posterior never holds NaN.
+    .. math:: p(s_c \mid g, z) \propto p(s_c \mid g) \cdot p(s_c \mid z)
+
+    The bookkeeping of :math:`p(s \mid g)` lives here, once for every estimator: the prior in log space
+    (normalised, −inf on occupied cells), the posterior
+
+    .. math:: \log p(s \mid g, \bar F) = \log p(s) + \log L(s) + \sum \log P(\bar F \mid s) - \log Z
+
+    normalised with ``logsumexp`` when first read, the "not found" factors :math:`P(\bar F \mid s)` of
+    :meth:`condition` kept through later readings, and the checks that no update leaves every cell at
+    probability zero. Subclasses implement :meth:`_propose` (the log-likelihood :math:`\log L(s)` of every
+    reading so far, after one more, without changing state) and :meth:`_accept` (commit it); :meth:`update`
+    rejects a reading that would leave no cell with positive probability (ValueError, state unchanged), so the
+    posterior never holds NaN.
 
     Parameters
     ----------
     model : PlumeModel
         The plume model of the map (shared between estimators to share its factorisation and cache).
     prior : (H, W) array_like of float, optional
-        Non-negative prior p(s) (normalised here; zeroed on occupied cells). Default: uniform over free cells.
+        Non-negative prior :math:`p(s)` (normalised here; zeroed on occupied cells). Default: uniform over free
+        cells.
     """
 
     def __init__(self, model: PlumeModel, *, prior=None):
@@ -234,17 +240,23 @@ class OlfactoryEstimator(abc.ABC):
         return self.posterior
 
     def condition(self, log_likelihood) -> np.ndarray:
-        """Multiply p(s | g) by the likelihood of an observation other than a gas reading, and keep it.
+        r"""Multiply :math:`p(s \mid g)` by the likelihood of an observation other than a gas reading, and keep
+        it.
 
-        The closed loop's "not found here" (:meth:`psgsl_pgm.search.DetectionModel.not_found_log_likelihood`):
-        p(s | g, F̄) ∝ p(s | g) P(F̄ | s). The factor stays in the posterior through later readings (it is
-        added to every later proposal) and is forgotten by :meth:`reset`. Since it depends on s only, fusing
-        the result with p(s | z) (eq. (11)) gives every variant the update exactly once.
+        The closed loop's "not found here" :math:`\bar F`
+        (:meth:`psgsl_pgm.search.DetectionModel.not_found_log_likelihood`):
+
+        .. math:: p(s \mid g, \bar F) \propto p(s \mid g)\, P(\bar F \mid s)
+
+        The factor stays in the posterior through later readings (it is added to every later proposal) and is
+        forgotten by :meth:`reset`. Since it depends on s only, fusing the result with :math:`p(s \mid z)`
+        (eq. (11)) gives every variant the update exactly once.
 
         Parameters
         ----------
         log_likelihood : (H, W) or (H·W,) array_like of float
-            log P(observation | s = c) for every cell: finite or −inf (probability 0), never NaN or +inf.
+            :math:`\log P(\text{observation} \mid s = c)` for every cell: finite or −inf (probability 0), never
+            NaN or +inf.
 
         Returns
         -------
@@ -387,20 +399,23 @@ class OlfactoryEstimator(abc.ABC):
         return self._hit_likelihood_rows(self._flat_cells(positions)).reshape((-1,) + self.geometry.shape)
 
     def information_gain(self, positions, *, posterior=None) -> np.ndarray:
-        """Expected information about S from one hit/miss reading at each candidate position, I(S; hit_x).
+        r"""Expected information about S from one hit/miss reading at each candidate position,
+        :math:`I(S; \text{hit}_x)`.
 
-        I(S; hit_x) = H_b(Σ_s p(s) P_x(s)) − Σ_s p(s) H_b(P_x(s)) with the binary entropy H_b and
-        P_x(s) = P(hit at x | s) the estimator's predictive hit probability (untempered; with false hits
-        for :class:`GridInfotaxis`): the olfactory term φ_G(p) of φ(p) = φ_G(p) + φ_O(p)
-        (Sec. "Information Gain Optimization"), in nats.
+        .. math:: I(S; \text{hit}_x) = H_b\Big(\sum_s p(s)\, P_x(s)\Big) - \sum_s p(s)\, H_b(P_x(s))
+
+        with the binary entropy :math:`H_b` and :math:`P_x(s) = P(\text{hit at } x \mid s)` the estimator's
+        predictive hit probability (untempered; with false hits for :class:`GridInfotaxis`), in nats: the
+        olfactory term :math:`\varphi_G(p)` of the objective of eq. (29) of the paper,
+        :math:`\varphi(p) = \varphi_G(p) + \varphi_O(p)` (Sec. "Information Gain Optimization").
 
         Parameters
         ----------
         positions : (n, 2) array_like of float
             Candidate sensor positions (x, y) in metres (free cells).
         posterior : (H, W) array_like, optional, keyword-only
-            The distribution p(s) of S under which to evaluate (default: this estimator's p(s | g)); e.g. the
-            fused p(s | g, z) when the robot also uses semantics.
+            The distribution :math:`p(s)` of S under which to evaluate (default: this estimator's
+            :math:`p(s \mid g)`); e.g. the fused :math:`p(s \mid g, z)` when the robot also uses semantics.
 
         Returns
         -------

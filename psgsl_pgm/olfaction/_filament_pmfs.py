@@ -25,7 +25,7 @@ def _logit(p):
 
 
 class FilamentPMFS(OlfactoryEstimator):
-    """PMFS (probabilistic mapping from simulation): the source posterior p(s | g) over the map's cells.
+    r"""PMFS (probabilistic mapping from simulation): the source posterior :math:`p(s \mid g)` over the map's cells.
 
     Three parts, as in the paper (Sec. III-V of Ojeda et al. 2024):
 
@@ -37,8 +37,9 @@ class FilamentPMFS(OlfactoryEstimator):
        miss only raises the confidence and ĥ, once raised by hits nearby, never falls: upwind of the source the
        kernel's reach then outvotes the misses), w_r(c) ∈ [0, 1] the anisotropic Gaussian stretched along the measured
        wind and evaluated at the geodesic displacement (:meth:`HitProbabilityMap.kernel`; semi-axes σ + k‖w‖
-       and σ / (1 + k‖w‖/σ)) and clamp to [0.001, 0.999]. ĥ_c = σ(ℓ_c). Confidence:
-       ω_c += exp(−d_rc² / (2 σ_ω²)), d_rc the geodesic distance, conf_c = 1 − exp(−ω_c / m²).
+       and σ / (1 + k‖w‖/σ)) and clamp to [0.001, 0.999]. :math:`\hat h_c = \sigma(\ell_c)`. Confidence:
+       :math:`\omega_c \mathrel{+}= e^{-d_{rc}^2 / (2 \sigma_\omega^2)}`, :math:`d_{rc}` the geodesic distance,
+       :math:`\mathrm{conf}_c = 1 - e^{-\omega_c / m^2}`.
     3. **Simulated hit maps and the update.** The free cells are split into square candidate regions of side
        ``region_size``; at each refresh every region with prior mass is simulated, and then, as PMFS refines its
        quadtree, the best ``refine_fraction`` of them by the score below are split into four children of half
@@ -47,16 +48,16 @@ class FilamentPMFS(OlfactoryEstimator):
        Gaussian noise of std sqrt(2 D dt) per axis — D the robot's calibrated diffusivity of its plume model —,
        a move into a wall skipped, outlets and the border removing; the project's compiled filament step,
        :mod:`psgsl_pgm.kernels._filaments`). After ``warmup_steps`` steps, ``record_steps`` more are recorded:
-       h_c(k) is the fraction of them in which the block of side ``hit_block`` holding c held a filament. Then
+       :math:`h_c(k)` is the fraction of them in which the block of side ``hit_block`` holding c held a
+       filament. Then (PMFS's ``weightedDifference``)
 
-           p(s | g) ∝ p(s) · Π_c [1 − conf_c + conf_c (1 − γ abs(ĥ_c − h_c(k(s))))]^λ
+       .. math:: p(s \mid g) \propto p(s) \prod_c \big[1 - \mathrm{conf}_c
+                 + \mathrm{conf}_c \big(1 - \gamma\, |\hat h_c - h_c(k(s))|\big)\big]^\lambda
 
-       (PMFS's ``weightedDifference``)
-
-       with k(s) the region of s, γ = ``discrimination`` (PMFS's ``sourceDiscriminationPower``, 1) and λ =
-       ``tempering`` (1: PMFS itself). The product runs over the cells with positive confidence. Every factor is
-       ≥ 1 − conf_c > 0, so no cell vetoes a source; like PMFS the posterior is recomputed from the hit map
-       after each reading, not multiplied up.
+       with k(s) the region of s, γ = ``discrimination`` (PMFS's ``sourceDiscriminationPower``, 1) and λ = ``tempering``
+       (1: PMFS itself). The product runs over the cells with positive confidence. Every factor is
+       :math:`\ge 1 - \mathrm{conf}_c > 0`, so no cell vetoes a source; like PMFS the posterior is recomputed from the
+       hit map after each reading, not multiplied up.
 
     The simulations are refreshed on the current wind estimate at the first reading and then every
     ``refresh`` readings (PMFS's ``stepsSourceUpdate`` = 10); between refreshes a reading only updates the
@@ -67,8 +68,8 @@ class FilamentPMFS(OlfactoryEstimator):
     confident cells). The cost of a refresh grows with filaments_per_step × (warmup_steps + record_steps)² per
     region in a house without outlets (the filaments stay): PMFS's own 5 filaments per step and 150 + 200 steps
     on 480 regions of 0.5 m take ≈ 22 s.
-    ``hit_probability`` and ``information_gain`` predict a reading by the simulated hit maps, P(hit at x | s) =
-    h_x(k(s)), once simulated (before that by the plume model).
+    ``hit_probability`` and ``information_gain`` predict a reading by the simulated hit maps,
+    :math:`P(\text{hit at } x \mid s) = h_x(k(s))`, once simulated (before that by the plume model).
 
     A property of the published hit map worth knowing: the log-odds filter saturates (ĥ → 1 wherever several
     hits overlap) and the kernel spreads a hit upwind as far as downwind, so with stops denser than the kernel's
@@ -354,7 +355,7 @@ class FilamentPMFS(OlfactoryEstimator):
 
     @property
     def confidence(self) -> np.ndarray:
-        """(H, W) conf = 1 − exp(−ω / m²)."""
+        r"""(H, W) :math:`\mathrm{conf} = 1 - e^{-\omega / m^2}`."""
         return (-np.expm1(-self._omega / self.confidence_weight ** 2)).reshape(self.geometry.shape)
 
     def hit_variance(self) -> np.ndarray:
@@ -364,7 +365,8 @@ class FilamentPMFS(OlfactoryEstimator):
         .. math:: \operatorname{Var}_c = \frac{\sum_k w_k (h_c(k) - \bar h_c)^2}{\sum_k w_k}, \qquad
                   \bar h_c = \frac{\sum_k w_k h_c(k)}{\sum_k w_k},
 
-        with w_k ∝ Π_c [1 − conf_c + conf_c (1 − γ abs(ĥ_c − h_c(k)))], each region's score under the current hit
+        with :math:`w_k \propto \prod_c \big[1 - \mathrm{conf}_c + \mathrm{conf}_c \big(1 - \gamma\,
+        |\hat h_c - h_c(k)|\big)\big]`, each region's score under the current hit
         map and confidence (PMFS weighs by the score at the refresh; the two differ by the readings since), scaled
         so that the largest is 1. Zeros before the first refresh and on occupied cells. PMFS's navigation
         (:mod:`psgsl_pgm.search._pmfs_nav`) drives to where this, times 1 − conf, is largest.

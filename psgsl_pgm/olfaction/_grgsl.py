@@ -18,24 +18,28 @@ __all__ = ["GrGSL"]
 
 
 class GrGSL(OlfactoryEstimator):
-    """GrGSL's cell-wise source probability from binary gas readings and the local wind direction.
+    r"""GrGSL's cell-wise source probability from binary gas readings and the local wind direction.
 
-    Each reading at cell r multiplies p(s | g) by a factor f_r(s) and renormalises (Sec. III of the paper; GrGSL's
-    ``estimateProbabilitiesfromGasAndWind``):
+    Each reading at cell r multiplies :math:`p(s \mid g)` by a factor :math:`f_r(s)` and renormalises (Sec. III
+    of the paper; GrGSL's ``estimateProbabilitiesfromGasAndWind``):
 
-    * **Hit with significant wind** (‖w‖ > ``wind_threshold``): the source is upwind. Every cell q on the ring of
-      cells at Chebyshev distance k from r gets f = exp(−Δ² / (2 σ_hit²)), Δ the angle between the direction
-      r → q and the upwind direction −w/‖w‖ (wrapped to (−π, π]); the cells inside the ring get f(Δ = 0).
+    * **Hit with significant wind** (‖w‖ > ``wind_threshold``): the source is upwind. Every cell q on the ring
+      of cells at Chebyshev distance k from r gets :math:`f = e^{-\Delta^2 / (2 \sigma_\text{hit}^2)}`, Δ the
+      angle between the direction r → q and the upwind direction −w/‖w‖ (wrapped to (−π, π]); the cells inside
+      the ring get f(Δ = 0).
     * **Miss**: the source is more likely towards the last hit: the same with Δ the angle between r → q and
-      r → (position of the last hit; the first reading's position before any hit), σ_miss, and the cells inside
-      the ring get f(Δ = π).
+      r → (position of the last hit; the first reading's position before any hit), :math:`\sigma_\text{miss}`,
+      and the cells inside the ring get f(Δ = π).
     * **Hit without significant wind**: no update (GrGSL's optional diffusion term is off by default).
 
     Every other cell takes the factor of the ring cell its shortest free path from r (8-connected, no corner
     cutting, walls blocking) leaves the ring through, so a wall sends the evidence around it (GrGSL propagates
     the ring's values over the navigation map, keeping the shortest path's). Cells no path reaches take the
-    smallest factor of the update. In log space the update is log p(s | g_{1:t}) = log p(s | g_{1:t−1})
-    − Δ_t(s)² / (2 σ_t²) + const: the Gaussian's normalisation and GrGSL's normalisation of the factors cancel.
+    smallest factor of the update. In log space the update is
+
+    .. math:: \log p(s \mid g_{1:t}) = \log p(s \mid g_{1:t-1}) - \frac{\Delta_t(s)^2}{2 \sigma_t^2} + \text{const}
+
+    (the Gaussian's normalisation and GrGSL's normalisation of the factors cancel).
 
     GrGSL runs on a coarsened copy of the map (its ``scale``) with the ring two coarse cells away; here it
     runs on the map's own cells with the ring at k = round(``ring_radius`` / resolution) cells, the same
@@ -47,11 +51,11 @@ class GrGSL(OlfactoryEstimator):
     model : PlumeModel
         The robot's map (its wind and plume parameters are not used).
     prior : (H, W) array_like, optional, keyword-only
-        p(s); uniform over free cells by default.
+        :math:`p(s)`; uniform over free cells by default.
     ring_radius : float, default 0.5, keyword-only
         Radius of the ring in metres (GrGSL: two cells of its coarse map).
     hit_std, miss_std : float, default 1.0, 2.0, keyword-only
-        σ_hit and σ_miss in radians (GrGSL's ``stdev_hit``, ``stdev_miss``).
+        :math:`\sigma_\text{hit}` and :math:`\sigma_\text{miss}` in radians (GrGSL's ``stdev_hit``, ``stdev_miss``).
     wind_threshold : float, default 0.05, keyword-only
         Wind speed in m/s above which a hit's wind direction is used (GrGSL's ``th_wind_present``).
 
@@ -93,9 +97,10 @@ class GrGSL(OlfactoryEstimator):
         self._loglik = np.zeros(self.geometry.shape[0] * self.geometry.shape[1])  # Σ_t log f_t(s)
 
     def log_factor(self, cell, direction: float, std: float, inner: float) -> np.ndarray:
-        """(H·W,) log f(s) = −Δ(s)² / (2 std²) of one update at ``cell`` (row, col), Δ the angle between the
-        direction cell → ring cell and ``direction`` (radians, map frame), ``inner`` the Δ of the cells inside
-        the ring; every other cell takes its ring cell's value along its shortest free path (see the class)."""
+        r"""(H·W,) :math:`\log f(s) = -\Delta(s)^2 / (2\, \mathrm{std}^2)` of one update at ``cell`` (row, col), Δ the
+        angle between the direction cell → ring cell and ``direction`` (radians, map frame), ``inner`` the Δ of the
+        cells inside the ring; every other cell takes its ring cell's value along its shortest free path (see the
+        class)."""
         geo = self.geometry
         h, w = geo.shape
         r0, c0 = geo.check_cell(cell)

@@ -28,24 +28,27 @@ def _parameter_grid(grid) -> np.ndarray:
 
 
 class GridInfotaxis(OlfactoryEstimator):
-    """Infotaxis posterior p(s | g) with the likelihood of a grid advection-diffusion plume.
+    r"""Infotaxis posterior :math:`p(s \mid g)` with the likelihood of a grid advection-diffusion plume.
 
     Each reading at sensor cell x multiplies the posterior by the likelihood of every candidate source s,
 
-        P(hit | s)  = ε + (1 − ε)(1 − δ)(1 − exp(−κ G(x | s))),
-        P(miss | s) = (1 − ε)[δ + (1 − δ) exp(−κ G(x | s))],
+    .. math::
 
-    i.e. Poisson encounters with mean κ G(x | s) in one sample (Vergassola et al. 2007: encounter rate
-    R(r | r0) ∝ c(r | r0)), with G the adjoint Green's function of :class:`PlumeModel` (walls no-flux, outlets
-    absorbing, the map's wind field), a false-hit probability ε (sensor noise, and model mismatch: without
-    it one hit where the model predicts G = 0 for the true source — e.g. a gust through a door the mean flow
-    does not carry — would exclude the true source for ever) and a missed-hit probability δ, its mirror image:
-    with probability δ the plume of this reading is not where the mean flow puts it (a gust that carries it away,
-    a wind estimate that is wrong here), and only a false hit can register. Without δ one reading without a hit
-    where the model predicts κG ≫ 1 costs the true source κG nats; with δ a miss costs at most −log δ. δ = 0
-    (the default) is the model without it, bit for bit. The log-likelihoods are accumulated,
+        P(\text{hit} \mid s) = \varepsilon + (1 - \varepsilon)(1 - \delta)\big(1 - e^{-\kappa G(x \mid s)}\big)
 
-        log p(s | g_1..n) = log p(s) + β Σ_k log P(g_k | s) − log Z,
+        P(\text{miss} \mid s) = (1 - \varepsilon)\big[\delta + (1 - \delta)\, e^{-\kappa G(x \mid s)}\big]
+
+    i.e. Poisson encounters with mean :math:`\kappa G(x \mid s)` in one sample (Vergassola et al. 2007: encounter rate
+    :math:`R(r \mid r_0) \propto c(r \mid r_0)`), with G the adjoint Green's function of :class:`PlumeModel` (walls
+    no-flux, outlets absorbing, the map's wind field), a false-hit probability ε (sensor noise, and model mismatch:
+    without it one hit where the model predicts G = 0 for the true source — e.g. a gust through a door the mean flow
+    does not carry — would exclude the true source for ever) and a missed-hit probability δ, its mirror image: with
+    probability δ the plume of this reading is not where the mean flow puts it (a gust that carries it away, a wind
+    estimate that is wrong here), and only a false hit can register. Without δ one reading without a hit where the model
+    predicts κG ≫ 1 costs the true source κG nats; with δ a miss costs at most −log δ. δ = 0 (the default) is the model
+    without it, bit for bit. The log-likelihoods are accumulated,
+
+    .. math:: \log p(s \mid g_{1:n}) = \log p(s) + \beta \sum_k \log P(g_k \mid s) - \log Z,
 
     and normalised with ``logsumexp``.
 
@@ -61,8 +64,9 @@ class GridInfotaxis(OlfactoryEstimator):
     reading shares roughly half of its information with its neighbours along the path (stops about one plume
     correlation length apart); estimate it from data instead where there are readings around known sources:
     :func:`ar1_tempering` turns the lag-1 autocorrelation ρ of the hit model's residuals into
-    β = (1 − ρ)/(1 + ρ) (the validation experiment does so on its calibration runs); β = 1 recovers Vergassola's exact update and is right for readings that are
-    independent draws from the model (as in the tests). The estimator is further meant to be called once per
+    :math:`\beta = (1 - \rho)/(1 + \rho)` (the validation experiment does so on its calibration runs); β = 1
+    recovers Vergassola's exact update and is right for readings that are independent draws from the model
+    (as in the tests). The estimator is further meant to be called once per
     stop (one reading per stop — several readings at one stop sample the same puffs): that convention, not
     β, removes the strongest correlation, so β need not be tiny. The estimator is deterministic (no random
     numbers); synthetic readings come from :meth:`PlumeModel.sample_hits` with an explicit seed.
@@ -72,19 +76,19 @@ class GridInfotaxis(OlfactoryEstimator):
     diffusivity of a source in the fast flow of a corridor is a third of that of a source in a room (the plume
     there stays narrow), and κ̂ varies fourfold between runs. A point estimate that is wrong for *this* run
     makes every reading a little more surprising under the true source than under a cell beside it, and the
-    posterior settles, confidently, beside the source. With a grid θ_j = (D_j, τ_j, κ_j) and prior weights π_j
-    (the population distribution of θ over calibration runs, :func:`mixture_weights`) the posterior is the
-    Bayesian model average with θ a run-level unknown,
+    posterior settles, confidently, beside the source. With a grid :math:`\theta_j = (D_j, \tau_j, \kappa_j)`
+    and prior weights :math:`\pi_j` (the population distribution of θ over calibration runs,
+    :func:`mixture_weights`) the posterior is the Bayesian model average with θ a run-level unknown,
 
-        p(s | g_1..n) ∝ p(s) Σ_j π_j Π_k P_θj(g_k | s)^β,
+    .. math:: p(s \mid g_{1:n}) \propto p(s) \sum_j \pi_j \prod_k P_{\theta_j}(g_k \mid s)^\beta,
 
-    i.e. the posterior over θ is updated online, jointly with s (p(θ_j | s, g) ∝ π_j Π_k P_θj(g_k | s)^β), and
-    the readings decide which plume this run has. It is exact (a log-sum-exp over j of the accumulated
-    per-component log-likelihoods); it costs one plume factorisation and one adjoint solve per reading per
-    distinct (D, τ) of the grid (κ is free: it only scales G). Without a grid the model's own (D, τ, κ) is the
-    single component, and the update is the one above. For planning, :meth:`hit_probability` and
-    :meth:`information_gain` use the prior predictive Σ_j π_j P_θj(hit | s) — fixed for a plume model, so the
-    closed loop's per-cell cache of hit rows stays valid — not the run's posterior over θ.
+    i.e. the posterior over θ is updated online, jointly with s (:math:`p(\theta_j \mid s, g) \propto \pi_j \prod_k
+    P_{\theta_j}(g_k \mid s)^\beta`), and the readings decide which plume this run has. It is exact (a log-sum-exp over
+    j of the accumulated per-component log-likelihoods); it costs one plume factorisation and one adjoint solve per
+    reading per distinct (D, τ) of the grid (κ is free: it only scales G). Without a grid the model's own (D, τ, κ) is
+    the single component, and the update is the one above. For planning, :meth:`hit_probability` and
+    :meth:`information_gain` use the prior predictive :math:`\sum_j \pi_j P_{\theta_j}(\text{hit} \mid s)` — fixed for a
+    plume model, so the closed loop's per-cell cache of hit rows stays valid — not the run's posterior over θ.
 
     Parameters
     ----------
@@ -99,7 +103,7 @@ class GridInfotaxis(OlfactoryEstimator):
     outlets : (H, W) ndarray of bool, optional
         Absorbing free cells.
     prior : (H, W) array_like of float, optional
-        Prior p(s); uniform over free cells by default.
+        Prior :math:`p(s)`; uniform over free cells by default.
     tempering : float, default 0.5
         β ∈ (0, 1], exponent of every reading's likelihood (see above).
     false_hit_rate : float, default 0.01

@@ -14,15 +14,15 @@ _NODES = 32  # Gauss–Legendre nodes in log q of the prior predictive (planning
 
 
 class ParticleFilter(OlfactoryEstimator):
-    r"""Sequential importance resampling over the source's position x_s and release rate q (Gordon, Salmond &
-    Smith 1993, IEE Proc. F 140:107–113; for gas sources e.g. Li, Meng, Wang & Zeng 2011, Auton. Robots
-    30:281–292), on the grid plume model of :class:`GridInfotaxis`.
+    r"""Sequential importance resampling over the source's position :math:`x_s` and release rate q (Gordon, Salmond &
+    Smith 1993, IEE Proc. F 140:107–113; for gas sources e.g. Li, Meng, Wang & Zeng 2011, Auton. Robots 30:281–292), on
+    the grid plume model of :class:`GridInfotaxis`.
 
-    **State and prior.** N particles θ_i = (x_i, y_i, log q_i) with weights w_i. x_i is a point in metres; it is
-    drawn from the prior p(s) over cells (times the factors given to :meth:`condition`), uniformly inside its
-    cell; log q_i is uniform on [log q_min, log q_max] (``release_rates``; q multiplies the plume model's
-    encounter scale κ, so q = 1 is the model's own source strength, and the prior is scale-free over a factor
-    q_max/q_min).
+    **State and prior.** N particles :math:`\theta_i = (x_i, y_i, \log q_i)` with weights :math:`w_i`. :math:`x_i` is a
+    point in metres; it is drawn from the prior :math:`p(s)` over cells (times the factors given to :meth:`condition`),
+    uniformly inside its cell; :math:`\log q_i` is uniform on :math:`[\log q_\text{min}, \log q_\text{max}]`
+    (``release_rates``; q multiplies the plume model's encounter scale κ, so q = 1 is the model's own source strength,
+    and the prior is scale-free over a factor q_max/q_min).
 
     **Likelihood.** A reading g at sensor x with the Poisson-encounter model of :class:`GridInfotaxis`, the
     source's strength scaling the expected encounters:
@@ -30,40 +30,45 @@ class ParticleFilter(OlfactoryEstimator):
     .. math:: P(\text{hit} \mid \theta) = \varepsilon + (1 - \varepsilon)\big(1 - e^{-q \kappa G(x \mid s)}\big),
               \qquad P(\text{miss} \mid \theta) = (1 - \varepsilon)\, e^{-q \kappa G(x \mid s)},
 
-    G the adjoint Green's function at the cell s of x_s, ε the false-hit rate; each factor tempered by β as in
-    :class:`GridInfotaxis`: w_i ← w_i P(g | θ_i)^β.
+    G the adjoint Green's function at the cell s of :math:`x_s`, ε the false-hit rate; each factor tempered by β
+    as in :class:`GridInfotaxis`:
 
-    **Resampling and roughening.** When the effective sample size 1/Σ w_i² falls below ``resample_below`` · N
-    the particles are resampled systematically (one uniform u ~ U[0, 1/N), the i-th pointer at u + i/N along the
-    cumulative weights; Kitagawa 1996) and roughened (Gordon et al. 1993): each coordinate d ∈ {x, y, log q}
-    gets Gaussian noise of standard deviation σ_d = K E_d N^{−1/3}, E_d the particles' range in d, K =
-    ``roughening``. A jitter that leaves the support (an occupied cell, off the map, a cell the prior or a "not
-    found" factor rules out) is not applied; log q is reflected into its interval.
+    .. math:: w_i \leftarrow w_i\, P(g \mid \theta_i)^\beta
 
-    **p(s | g) on the grid** is the particles' weight per cell, p(s = c | g) = Σ_{i: x_i ∈ c} w_i: cells without a
-    particle have probability 0. With many particles and little roughening it tends to the grid posterior
-    ∫ p(s, q | g) dq of the same model (checked in the tests).
+    **Resampling and roughening.** When the effective sample size :math:`1 / \sum_i w_i^2` falls below
+    ``resample_below`` · N the particles are resampled systematically (one uniform :math:`u \sim U[0, 1/N)`, the i-th
+    pointer at :math:`u + i/N` along the cumulative weights; Kitagawa 1996) and roughened (Gordon et al. 1993): each
+    coordinate d ∈ {x, y, log q} gets Gaussian noise of standard deviation :math:`\sigma_d = K E_d N^{-1/3}`,
+    :math:`E_d` the particles' range in d, K = ``roughening``. A jitter that leaves the support (an occupied cell, off
+    the map, a cell the prior or a "not found" factor rules out) is not applied; log q is reflected into its interval.
 
-    **"Not found" and the semantic fusion.** :meth:`condition` multiplies each particle's weight by the factor of
-    its cell, P(F̄ | s_i), then resamples as after a reading; the grid posterior is formed from the particles, so
-    the fusion p(s | g, z) ∝ p(s | g) p(s | z) and the semantic variants are those of every estimator. When a
-    reading or a factor leaves no particle with positive weight, the filter restarts: N new particles from the
-    prior times every factor so far, weighted by the likelihood of every reading so far (importance sampling
-    from that proposal), then resampled.
+    :math:`p(s \mid g)` **on the grid** is the particles' weight per cell,
+
+    .. math:: p(s = c \mid g) = \sum_{i:\, x_i \in c} w_i;
+
+    cells without a particle have probability 0. With many particles and little roughening it tends to the grid
+    posterior :math:`\int p(s, q \mid g)\, dq` of the same model (checked in the tests).
+
+    **"Not found" and the semantic fusion.** :meth:`condition` multiplies each particle's weight by the factor of its
+    cell, :math:`P(\bar F \mid s_i)`, then resamples as after a reading; the grid posterior is formed from the
+    particles, so the fusion :math:`p(s \mid g, z) \propto p(s \mid g)\, p(s \mid z)` and the semantic variants are
+    those of every estimator. When a reading or a factor leaves no particle with positive weight, the filter restarts: N
+    new particles from the prior times every factor so far, weighted by the likelihood of every reading so far
+    (importance sampling from that proposal), then resampled.
 
     **Random numbers.** Every draw comes from a generator seeded by (``seed``, the number of updates so far): the
     filter is reproducible, and :meth:`replace_model` (a re-solved plume after the wind estimate moved) replays
     the readings and factors in order with the same draws.
 
     **Planning.** :meth:`hit_probability` and :meth:`information_gain` use the prior predictive over q,
-    P(hit | s) = ε + (1 − ε)(1 − E_q e^{−qκG}) (Gauss–Legendre in log q), fixed for a plume model as the
-    closed loop's cached rows need.
+    :math:`P(\text{hit} \mid s) = \varepsilon + (1 - \varepsilon)\big(1 - \mathbb{E}_q\, e^{-q \kappa G}\big)`
+    (Gauss–Legendre in log q), fixed for a plume model as the closed loop's cached rows need.
 
     Parameters
     ----------
     model : PlumeModel
     prior : (H, W) array_like of float, optional, keyword-only
-        p(s); uniform over the free cells by default.
+        :math:`p(s)`; uniform over the free cells by default.
     n_particles : int, keyword-only
         N.
     release_rates : (2,) tuple of float, keyword-only
@@ -123,7 +128,7 @@ class ParticleFilter(OlfactoryEstimator):
         return self._w.copy()
 
     def release_rate_mean(self) -> float:
-        """Posterior mean of q, Σ w_i q_i."""
+        r"""Posterior mean of q, :math:`\sum_i w_i q_i`."""
         return float(self._w @ np.exp(self._logq))
 
     def _rng(self, tag: int) -> np.random.Generator:

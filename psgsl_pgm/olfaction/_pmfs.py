@@ -15,41 +15,44 @@ _HITMAP_KEYS = ("prior_hit", "prior_strength", "kernel_sigma", "kernel_stretch",
 
 
 class PMFSEstimator(OlfactoryEstimator):
-    """Source posterior of the PMFS family (Ojeda, Monroy & Gonzalez-Jimenez) on an analytic plume: estimator
+    r"""Source posterior of the PMFS family (Ojeda, Monroy & Gonzalez-Jimenez) on an analytic plume: estimator
     ``analytic-plume``. PMFS as published, with filament simulations, is :class:`FilamentPMFS` (``pmfs``).
 
     PMFS keeps a map of hit probabilities with a confidence (:class:`HitProbabilityMap`) and scores every
-    candidate source s by how well the hit map it would produce, h_c(s), agrees with the estimate ĥ_c, each
-    cell weighted by its confidence (PMFS ``Simulations::weightedDifference``):
+    candidate source s by how well the hit map it would produce, :math:`h_c(s)`, agrees with the estimate
+    :math:`\hat h_c`, each cell weighted by its confidence (PMFS ``Simulations::weightedDifference``), the PMFS
+    score:
 
-        p(s | g) ∝ p(s) · Π_c [1 − γ · conf_c · abs(ĥ_c − h_c(s))],            (PMFS score)
+    .. math:: p(s \mid g) \propto p(s) \prod_c \big[1 - \gamma\, \mathrm{conf}_c\, |\hat h_c - h_c(s)|\big]
 
-    computed as a sum of ``log1p`` terms. Every factor lies in [1 − γ, 1], so no single cell can veto a
-    source: the score is a bounded pseudo-likelihood, and the posterior is recomputed from the current hit map
-    after each reading rather than multiplied up over time. Its sharpness is still not a probability statement
-    (it grows with the number of compared cells): the exponent λ (``tempering``) rescales it, p(s | g) ∝
-    p(s) · (Π_c [...])^λ, and is fitted on calibration runs (:func:`score_tempering`).
+    computed as a sum of ``log1p`` terms. Every factor lies in :math:`[1 - \gamma, 1]`, so no single cell can
+    veto a source: the score is a bounded pseudo-likelihood, and the posterior is recomputed from the current
+    hit map after each reading rather than multiplied up over time. Its sharpness is still not a probability
+    statement (it grows with the number of compared cells): the exponent λ (``tempering``) rescales it,
+    :math:`p(s \mid g) \propto p(s) \big(\prod_c [\dots]\big)^\lambda`, and is fitted on calibration runs
+    (:func:`score_tempering`).
 
     Simplifications with respect to PMFS, and why:
 
-    * PMFS obtains h_c(s) by simulating filaments from (quadtree regions of) candidate sources in
-      the estimated wind and counting their visits per cell. We use the expected value of that frequency under the
-      Poisson-encounter advection-diffusion model shared with :class:`GridInfotaxis`,
-      h_c(s) = 1 − exp(−κ G(c | s)), which is deterministic and, through the adjoint Green's function,
-      available for *all* candidates s at once (one solve per compared cell, cached).
+    * PMFS obtains h_c(s) by simulating filaments from (quadtree regions of) candidate sources in the estimated wind and
+      counting their visits per cell. We use the expected value of that frequency under the Poisson-encounter
+      advection-diffusion model shared with :class:`GridInfotaxis`, :math:`h_c(s) = 1 - e^{-\kappa G(c \mid s)}`, which
+      is deterministic and, through the adjoint Green's function, available for *all* candidates s at once (one solve
+      per compared cell, cached).
     * The product runs over the cells the robot has measured in (its stops), where the hit map is most
       confident, instead of over all free cells: that keeps the cost at one adjoint solve per stop. Cells
       between stops only carry kernel-interpolated copies of the same readings, and their confidence is lower.
     * The hit map's per-cell filter is a Beta posterior instead of PMFS' log-odds filter, so that misses lower
-      ĥ (see :class:`HitProbabilityMap`).
+      :math:`\hat h` (see :class:`HitProbabilityMap`).
 
     The measured wind orients and stretches the hit-map kernel, as in PMFS; when a reading comes without wind,
     the model's wind field at the sensor cell is used. The estimator is deterministic.
 
     Because every factor is bounded and saturates with its cell's confidence, repeated readings at one cell move
-    the posterior less and less, unlike a Bayes update (whose factors P(g | s) multiply up). A planner that
-    expects I(S; hit) from a reading here expects information this estimator never takes in:
-    :meth:`reading_log_ratio` gives the factor its update would actually apply, so that the closed loop's φ_G is
+    the posterior less and less, unlike a Bayes update (whose factors :math:`P(g \mid s)` multiply up). A
+    planner that expects :math:`I(S; \text{hit})` from a reading here expects information this estimator never
+    takes in: :meth:`reading_log_ratio` gives the factor its update would actually apply, so that the closed
+    loop's :math:`\varphi_G` is
     the expected entropy drop under this update (the policies of :mod:`psgsl_pgm.search`).
 
     Parameters
@@ -65,13 +68,14 @@ class PMFSEstimator(OlfactoryEstimator):
     outlets : (H, W) ndarray of bool, optional
         Absorbing free cells.
     prior : (H, W) array_like of float, optional
-        Prior p(s); uniform over free cells by default.
+        Prior :math:`p(s)`; uniform over free cells by default.
     discrimination : float, default 0.9
         γ ∈ (0, 1): PMFS' ``sourceDiscriminationPower``; γ < 1 keeps every factor positive.
     tempering : float, default 1.0
-        λ > 0, the exponent of the score: p(s | g) ∝ p(s) · (Π_c [...])^λ. The PMFS score is a pseudo-likelihood
-        whose sharpness is not a probability statement; λ rescales it so that its posterior is calibrated
-        (fitted by the log score of known sources on calibration runs in the experiment); 1 is PMFS itself.
+        λ > 0, the exponent of the score: :math:`p(s \mid g) \propto p(s) \big(\prod_c [\dots]\big)^\lambda`. The PMFS
+        score is a pseudo-likelihood whose sharpness is not a probability statement; λ rescales it so that its posterior
+        is calibrated (fitted by the log score of known sources on calibration runs in the experiment); 1 is PMFS
+        itself.
     prior_hit, prior_strength, kernel_sigma, kernel_stretch, confidence_scale, cutoff
         Options of :class:`HitProbabilityMap`.
     **plume : keyword arguments
@@ -192,16 +196,21 @@ class PMFSEstimator(OlfactoryEstimator):
             self._cells.append(flat)
 
     def reading_log_ratio(self, positions) -> np.ndarray:
-        """How one more reading would move the posterior: λ [S'(s) − S(s)] for a miss and for a hit at each position.
+        r"""How one more reading would move the posterior: :math:`\lambda [S'(s) - S(s)]` for a miss and for a hit
+        at each position.
 
-        With S(s) = Σ_c log[1 − γ conf_c abs(ĥ_c − h_c(s))] the current score and S'_g(s) the score after one
-        reading g ∈ {miss, hit} at x (the hit map updated by its kernel, x added to the compared cells if new),
-        :meth:`update` turns p(s | g) into p(s | g, g_x) ∝ p(s | g) · L_g(s), L_g = exp(λ [S'_g − S]) — the
-        estimator's own update, written as a factor on the current posterior (the "not found" factors and a fused
-        semantic term multiply both sides alike). For a Bayesian estimator L_g(s) would be P(g | s); for PMFS it is
-        the pseudo-likelihood the recomputed score implies, which is what the closed loop must expect a reading
-        to do (the policies of :mod:`psgsl_pgm.search`). The kernel is oriented by the model's wind at x (the
-        wind the reading will bring is not known before it); the state is not changed.
+        With :math:`S(s) = \sum_c \log\big[1 - \gamma\, \mathrm{conf}_c\, |\hat h_c - h_c(s)|\big]` the current
+        score and :math:`S'_g(s)` the score after one reading :math:`g \in \{\text{miss}, \text{hit}\}` at x (the
+        hit map updated by its kernel, x added to the compared cells if new), :meth:`update` turns
+        :math:`p(s \mid g)` into
+
+        .. math:: p(s \mid g, g_x) \propto p(s \mid g)\, L_g(s), \qquad L_g = e^{\lambda [S'_g - S]}
+
+        This is the estimator's own update, written as a factor on the current posterior (the "not found" factors and a
+        fused semantic term multiply both sides alike). For a Bayesian estimator :math:`L_g(s)` would be
+        :math:`P(g \mid s)`; for PMFS it is the pseudo-likelihood the recomputed score implies, which is what the closed
+        loop must expect a reading to do (the policies of :mod:`psgsl_pgm.search`). The kernel is oriented by the
+        model's wind at x (the wind the reading will bring is not known before it); the state is not changed.
 
         Only the compared cells within the kernel's reach change, so the cost is one log per free cell for each of
         them and for x itself; the kernels are cached per cell until the plume model changes.
@@ -258,7 +267,8 @@ class PMFSEstimator(OlfactoryEstimator):
 
     @property
     def score(self) -> np.ndarray:
-        """(H, W) the untempered PMFS score Σ_c log[1 − γ conf_c abs(ĥ_c − h_c(s))] of every candidate s (a copy)."""
+        r"""(H, W) the untempered PMFS score :math:`\sum_c \log\big[1 - \gamma\, \mathrm{conf}_c\,
+        |\hat h_c - h_c(s)|\big]` of every candidate s (a copy)."""
         return self._score.reshape(self.geometry.shape).copy()
 
     @property

@@ -1,8 +1,9 @@
-"""Closed-loop search: policies that choose where to go and where to look with φ(p) = φ_G(p) + φ_O(p)
-(Sec. "Information Gain Optimization"), the closed loop in the simulated house through the validation
-experiment's own per-step code, declarations with credible regions, the open-space benchmark, and the
-many-house benchmark (:func:`run_benchmark`: generated homes, sources drawn from the ontology, three ontology
-conditions), and the same estimators and policies live on a robot's ROS 2 topics (:func:`run_live`).
+r"""Closed-loop search: policies that choose where to go and where to look with
+:math:`\varphi(p) = \varphi_G(p) + \varphi_O(p)` (eq. (29), Sec. "Information Gain Optimization"), the closed loop in
+the simulated house through the validation experiment's own per-step code, declarations with credible regions, the
+open-space benchmark, and the many-house benchmark (:func:`run_benchmark`: generated homes, sources drawn from the
+ontology, three ontology conditions), and the same estimators and policies live on a robot's ROS 2 topics
+(:func:`run_live`).
 """
 
 from ._benchmark import BENCHMARK_POLICIES, BENCHMARK_VARIANTS, run_benchmark

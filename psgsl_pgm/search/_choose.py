@@ -16,7 +16,7 @@ __all__ = ["choose"]
 
 
 def choose(policy: str, sit: Situation) -> Decision:
-    """The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan).
+    r"""The next pose of ``policy`` (one of :data:`POLICIES` but ``tour``, which follows its own plan).
 
     Parameters
     ----------
@@ -37,6 +37,27 @@ def choose(policy: str, sit: Situation) -> Decision:
     ------
     ValueError
         ``policy`` is ``"tour"`` or not a policy name.
+
+    Notes
+    -----
+    The scoring policies rank candidate poses p by a gain G(p) per time :math:`\tau(p)` (s) of
+    :func:`travel_time`, with :func:`score_per_time` (or by G(p) alone under ``SearchConfig(score="gain")``).
+    With :math:`P_f(p)` the probability that a stop at p finds the source (:class:`DetectionModel`),
+    ``"infotaxis"`` expects the information of the stop, the objective of eq. (29) of the paper when the source
+    is not found:
+
+    .. math:: G(p) = P_f(p)\, H(S) + \big(1 - P_f(p)\big) \big[\varphi_G(p) + \varphi_O(p)\big]
+
+    with :math:`\varphi_G(p)` the information of one gas reading
+    (:meth:`psgsl_pgm.olfaction.OlfactoryEstimator.information_gain`) and
+    :math:`\varphi_O(p) = \sum_{n \in F_p} I(S; O_n)` that of the camera's view
+    (:func:`psgsl_pgm.view_information_gain`). ``"entrotaxis"`` scores the entropy of the stop's predicted measurement
+    (found; not found with a hit; not found with a miss),
+
+    .. math:: G(p) = H_b(P_f(p)) + \big(1 - P_f(p)\big)\, H_b(\bar P_p),
+
+    :math:`H_b` the binary entropy (both gains in nats) and :math:`\bar P_p` the predicted probability of a hit at p
+    given that the stop does not find the source.
     """
     if policy == "greedy":
         return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell

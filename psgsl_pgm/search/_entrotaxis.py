@@ -8,23 +8,23 @@ scores it by the entropy of the *predicted measurement* there,
 .. math:: a^* = \arg\max_a H\big[p(\hat z_{k+1}(a) \mid D_k)\big]
                = \arg\max_a \Big(-\sum_z p(z \mid D_k, a) \log p(z \mid D_k, a)\Big),
 
-with p(z | D_k, a) = Σ_s p(s | D_k) P(z | s, a) the posterior predictive. By I(S; Z) = H(Z) − H(Z | S) it is
-the mutual information plus the measurement's own noise, E_s H(Z | s): it needs no posterior per outcome (one
-predictive per pose), and a pose where the model is unsure of the reading for every source scores as well as
-one where the sources disagree.
+with :math:`p(z \mid D_k, a) = \sum_s p(s \mid D_k)\, P(z \mid s, a)` the posterior predictive. By
+:math:`I(S; Z) = H(Z) - H(Z \mid S)` it is the mutual information plus the measurement's own noise,
+:math:`\mathbb{E}_s H(Z \mid s)`: it needs no posterior per outcome (one predictive per pose), and a pose where the
+model is unsure of the reading for every source scores as well as one where the sources disagree.
 
 **The measurement of a stop** in the closed loop is the found rule's outcome and, when not found, the gas
-reading: z ∈ {found, (not found, hit), (not found, miss)}, under the detection model P_f of
-:mod:`psgsl_pgm.search._policies` and the estimator's hit model P_p(s) = P(hit at p | s):
+reading: z ∈ {found, (not found, hit), (not found, miss)}, under the detection model :math:`P_f` of
+:mod:`psgsl_pgm.search._policies` and the estimator's hit model :math:`P_p(s) = P(\text{hit at } p \mid s)`:
 
 .. math:: G(p) = H_b(P_f(p)) + (1 - P_f(p))\, H_b(\bar P_p),
           \qquad \bar P_p = \frac{\sum_s p(s)\, w_p(s)\, P_p(s)}{1 - P_f(p)},
 
-H_b the binary entropy in nats, w_p(s) = m on the hypotheses the stop finds (m the miss probability) and 1
-elsewhere, p(s) the variant's posterior (with a semantic variant, the fused p(s | g, z): the semantic term
-shapes the predictive; the camera's frames are not part of the scored measurement). G ≤ ln 3. The same
-candidate poses, travel times τ(p) and scoring rule (``per-time``: G/τ; ``gain``: G) as ``infotaxis``; G does
-not depend on the camera heading, so the heading that costs least time wins (the first one under ``gain``).
+:math:`H_b` the binary entropy in nats, :math:`w_p(s) = m` on the hypotheses the stop finds (m the miss probability)
+and 1 elsewhere, p(s) the variant's posterior (with a semantic variant, the fused :math:`p(s \mid g, z)`: the
+semantic term shapes the predictive; the camera's frames are not part of the scored measurement). G ≤ ln 3. The same
+candidate poses, travel times τ(p) and scoring rule (``per-time``: G/τ; ``gain``: G) as ``infotaxis``; G does not
+depend on the camera heading, so the heading that costs least time wins (the first one under ``gain``).
 
 What the binary measurement does to the method: with Poisson counts (Hutchinson et al.) the predicted entropy
 grows with the expected count and draws the searcher to the source; a hit/miss reading's entropy is largest
@@ -49,7 +49,11 @@ def _hb(p):
 
 
 def entrotaxis_gain(sit, cells) -> np.ndarray:
-    """G(p), the entropy of the predicted measurement of a stop at each candidate cell (module docstring), nats.
+    r"""G(p), the entropy of the predicted measurement of a stop at each candidate cell, nats:
+
+    .. math:: G(p) = H_b(P_f(p)) + \big(1 - P_f(p)\big)\, H_b(\bar P_p)
+
+    (module docstring).
 
     Parameters
     ----------

@@ -57,7 +57,7 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
                     search: SearchConfig | None = None, world=None, space: FreeSpace | None = None,
                     world_spec=None, recorder=None, gas_type: str | None = None, extra_sources=(),
                     extra_gas_types=None) -> SearchRun:
-    """Run one closed-loop search in the simulated house: the robot senses, updates its beliefs, chooses its next
+    r"""Run one closed-loop search in the simulated house: the robot senses, updates its beliefs, chooses its next
     stop, and declares the source (module docstring).
 
     Parameters
@@ -68,16 +68,16 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
     seed : int
         World seed (house jitter, wind, gas, sensors, detector, the source detector's misses).
     policy : str
-        How the robot chooses its next stop, one of :data:`psgsl_pgm.search.POLICIES`: ``"tour"`` (the
-        validation experiment's fixed exploration tour, back and forth), ``"greedy"`` (the most probable reachable
-        cell), ``"infotaxis"`` (φ = φ_G + φ_O per second, eq. (29)), ``"space-aware-infotaxis"``,
-        ``"semantic-modes"`` and ``"nearest-object"`` (semantics alone), or a method of the field
-        (``"entrotaxis"``, ``"surge-cast"``, ``"spiral"``; :mod:`psgsl_pgm.search._policies`).
+        How the robot chooses its next stop, one of :data:`psgsl_pgm.search.POLICIES`: ``"tour"`` (the validation
+        experiment's fixed exploration tour, back and forth), ``"greedy"`` (the most probable reachable cell),
+        ``"infotaxis"`` (:math:`\varphi = \varphi_G + \varphi_O` per second, eq. (29)), ``"space-aware-infotaxis"``,
+        ``"semantic-modes"`` and ``"nearest-object"`` (semantics alone), or a method of the field (``"entrotaxis"``,
+        ``"surge-cast"``, ``"spiral"``; :mod:`psgsl_pgm.search._policies`).
     variant : {"olfaction", "semantics", "semantics+rooms"}
-        Which posterior the robot uses (the experiment's code path for it): p(s | g) alone, fused with p(s | z) of
-        class beliefs from the camera, or of class beliefs that start from the room map.
+        Which posterior the robot uses (the experiment's code path for it): :math:`p(s \mid g)` alone, fused with
+        :math:`p(s \mid z)` of class beliefs from the camera, or of class beliefs that start from the room map.
     estimator : str
-        The olfactory estimator giving p(s | g), one of :data:`psgsl_pgm.experiment.ESTIMATORS`.
+        The olfactory estimator giving :math:`p(s \mid g)`, one of :data:`psgsl_pgm.experiment.ESTIMATORS`.
     config : ExperimentConfig, optional, keyword-only
         Physics, estimator and world-model settings (the validation experiment's; default ``ExperimentConfig()``).
     search : SearchConfig, optional, keyword-only

@@ -20,10 +20,14 @@ the MAP cell and re-plans every ``horizon`` metres). Near and far, the candidate
 space with its detection model before the first decision): a far target's P_f is then that of the stop that
 finds the hypotheses there, not of the lattice cell nearest them, which near furniture may find none of them.
 
-**P_f** is the probability of finding the source at p under the detection model of the success rule
-(:class:`psgsl_pgm.search.DetectionModel`): P_f(p) = (1 − m) Σ_{c: d(p, R(c)) ≤ r} p(c), R(c) the found region of
-hypothesis c (an object's footprint or c itself), m the miss probability; the belief after "not found at p" is
-p(c) w_p(c) / (1 − P_f), w_p(c) = m on those hypotheses, 1 elsewhere — the update the loop then applies.
+:math:`P_f` is the probability of finding the source at p under the detection model of the success rule
+(:class:`psgsl_pgm.search.DetectionModel`):
+
+.. math:: P_f(p) = (1 - m) \sum_{c:\, d(p, R(c)) \le r} p(c),
+
+R(c) the found region of hypothesis c (an object's footprint or c itself), m the miss probability; the belief
+after "not found at p" is :math:`p(c)\, w_p(c) / (1 - P_f)`, :math:`w_p(c) = m` on those hypotheses, 1 elsewhere —
+the update the loop then applies.
 
 **Scoring rule** (:data:`SCORES`). Each candidate pose costs the time
 
@@ -32,24 +36,32 @@ p(c) w_p(c) / (1 − P_f), w_p(c) = m on those hypotheses, 1 elsewhere — the u
 the geodesic drive d at speed v, the camera turn Δθ from the current heading (``turn_time`` per quarter turn,
 as on the tour), and the fixed time of one gas reading.
 
-* ``"per-time"`` (the default) — a policy's gain G(p) is divided by τ(p): score(p) = G(p)/τ(p) when
-  G(p) > 0, and G(p)·τ(p) otherwise (a loss grows with the time spent on it).
-* ``"gain"`` — score(p) = G(p): the most informative candidate pose, however long it takes to reach.
-  Dividing by τ favours the short, cheap moves around the robot where every pose gains little; in the house
-  that kept infotaxis out of the bedroom (docs/results/closed-loop.md).
+* ``"per-time"`` (the default) — a policy's gain G(p) is divided by τ(p) (a loss grows with the time spent
+  on it):
+
+  .. math:: \text{score}(p) = \begin{cases} G(p) / \tau(p) & G(p) > 0 \\
+            G(p)\, \tau(p) & \text{otherwise} \end{cases}
+
+* ``"gain"`` — :math:`\text{score}(p) = G(p)`: the most informative candidate pose, however long it takes to reach.
+  Dividing by τ favours the short, cheap moves around the robot where every pose gains little; in the house that kept
+  infotaxis out of the bedroom (docs/results/closed-loop.md).
 
 The best score wins; ties go to the first candidate (lattice order) and the first heading. The robot always
 moves (:meth:`FreeSpace.candidates`).
 
 * ``infotaxis`` — the expected information of the next stop, Vergassola et al. (2007) with the probability
-  P_f(p) of finding the source there:
-  G(p) = P_f(p) H(S) + (1 − P_f(p)) [φ_G(p) + φ_O(p)], φ_G = I(S; hit at p) under the variant's posterior and
-  φ_O = Σ_{n ∈ F_p} I(S; O_n) (exact mutual information of each cell's class) — φ_O = 0 for ``olfaction``.
-  Both terms are information about S in nats, so no weight is needed (Sec. "Information Gain Optimization").
-  With the analytic-plume estimator (PMFS's score), whose posterior is recomputed from a hit map rather than updated by Bayes' rule, φ_G
-  is the expected entropy drop under that estimator's own update (:func:`olfactory_gain`). Decided by exact
-  branch and bound (:func:`_choose_infotaxis`, :func:`_branch_and_bound`): upper bounds of φ_G and φ_O, then the
-  exact score of the poses whose bound reaches the best one (every pose under its own update).
+  :math:`P_f(p)` of finding the source there, and the objective of eq. (29) of the paper, :math:`\varphi_G + \varphi_O`:
+
+  .. math:: G(p) = P_f(p)\, H(S) + \big(1 - P_f(p)\big) \big[\varphi_G(p) + \varphi_O(p)\big],
+
+  :math:`\varphi_G = I(S; \text{hit at } p)` under the variant's posterior and
+  :math:`\varphi_O = \sum_{n \in F_p} I(S; O_n)` (eq. (31); exact mutual information of each cell's class) —
+  :math:`\varphi_O = 0` for ``olfaction``. Both terms are information about S in nats, so no weight is needed (Sec.
+  "Information Gain Optimization"). With the analytic-plume estimator (PMFS's score), whose posterior is recomputed from
+  a hit map rather than updated by Bayes' rule, :math:`\varphi_G` is the expected entropy drop under that estimator's
+  own update (:func:`olfactory_gain`). Decided by exact branch and bound (:func:`_choose_infotaxis`,
+  :func:`_branch_and_bound`): upper bounds of φ_G and φ_O, then the exact score of the poses whose bound reaches the
+  best one (every pose under its own update).
 * ``space-aware-infotaxis`` — Loisy & Eloy (2022): the value V = log₂(D + 2^{H−1} − ½), with D the expected
   distance to the source and H the entropy in bits, estimates log₂ of the remaining search. On their lattice the
   source is found on its own cell, so a belief that has not found it has D ≥ 1 move, V ≥ 0, and V = 0 (the
@@ -74,7 +86,8 @@ moves (:meth:`FreeSpace.candidates`).
   each), which dominated the decisions in large homes.
 * ``greedy`` — drive towards the most probable cell: the candidate within the horizon nearest (geodesic) to
   the MAP cell, with the camera towards it.
-* ``semantic-modes`` — semantics alone, no gas: drive towards the mode of p(s | z, F̄) ∝ p(s | z) p(s) P(F̄ | s),
+* ``semantic-modes`` — semantics alone, no gas: drive towards the mode of
+  :math:`p(s \mid z, \bar F) \propto p(s \mid z)\, p(s)\, P(\bar F \mid s)`,
   the variant's semantic term (eq. ``prob-semantics-final``) times the source region's prior and the "not found"
   factors of every move so far (:attr:`OlfactoryEstimator.log_conditioning`), as ``greedy`` drives towards the
   MAP cell, but to the drivable cell nearest the mode once it is within the horizon (not only to the lattice).
@@ -198,7 +211,12 @@ def _wrap(a):
 
 
 def travel_time(drive, turn, *, speed: float, turn_time: float, sense_time: float) -> np.ndarray:
-    """τ = drive / speed + turn_time · abs(turn) / (π/2) + sense_time (s), broadcast over drive and turn.
+    r"""The time of each candidate pose, broadcast over ``drive`` and ``turn`` (s):
+
+    .. math:: \tau = \frac{\text{drive}}{\text{speed}} + t_\text{turn}\, \frac{|\text{turn}|}{\pi / 2}
+              + t_\text{sense}
+
+    with :math:`t_\text{turn}` = ``turn_time`` and :math:`t_\text{sense}` = ``sense_time``.
 
     Parameters
     ----------
@@ -227,7 +245,9 @@ def travel_time(drive, turn, *, speed: float, turn_time: float, sense_time: floa
 
 
 def score_per_time(gain, tau) -> np.ndarray:
-    """The pose-scoring rule: G/τ for G > 0, G·τ otherwise (see the module docstring).
+    r"""The pose-scoring rule ``"per-time"``: a gain per second, a loss times the time spent on it.
+
+    .. math:: \text{score} = \begin{cases} G / \tau & G > 0 \\ G\, \tau & \text{otherwise} \end{cases}
 
     Parameters
     ----------
@@ -441,9 +461,12 @@ def _expected_entropy_drop(post, p_hit, log_factors) -> np.ndarray:
 
 
 def olfactory_gain(sit: Situation, cells) -> np.ndarray:
-    """φ_G, the information about S one gas reading at p is expected to bring, (K,) nats.
+    r""":math:`\varphi_G`, the information about S one gas reading at p is expected to bring, (K,) nats.
 
-    For a Bayesian estimator (grid Infotaxis) φ_G = I(S; hit at p) = H_b(Σ_s p(s) P_p(s)) − Σ_s p(s) H_b(P_p(s))
+    For a Bayesian estimator (grid Infotaxis)
+
+    .. math:: \varphi_G = I(S; \text{hit at } p) = H_b\Big(\sum_s p(s)\, P_p(s)\Big) - \sum_s p(s)\, H_b(P_p(s))
+
     under the variant's posterior (:meth:`OlfactoryEstimator.information_gain` with ``posterior=``, the static rows
     cached). That mutual information is the expected drop of H(S) *when the posterior is updated by Bayes' rule
     with P_p(s)*. The PMFS posterior is not: it is recomputed from the hit map, each compared cell's factor is
@@ -452,12 +475,14 @@ def olfactory_gain(sit: Situation, cells) -> np.ndarray:
     information the estimator never takes in, and cycles between two stops. For such an estimator
     (``reading_log_ratio``, :func:`_reading_factors`) φ_G is the expected entropy drop under its own update,
 
-        φ_G(p) = H(S) − Σ_{g ∈ {miss, hit}} P(g at p) H(q_g),   q_g ∝ p(s | ·) L_g(s),
+    .. math:: \varphi_G(p) = H(S) - \sum_{g \in \{\text{miss}, \text{hit}\}} P(g \text{ at } p)\, H(q_g),
+              \qquad q_g \propto p(s \mid \cdot)\, L_g(s),
 
-    with P(hit at p) = Σ_s p(s) P_p(s) from the estimator's hit model h_p(s) (the same predictive as above) and
-    L_g its update factor. For a Bayes update L_g = P(g | s) and this is the mutual information again (the two
-    definitions of infotaxis, Vergassola et al. 2007, coincide); for PMFS it may be negative (a reading expected to
-    spread the posterior). Exact, one pass over the free cells per candidate and outcome."""
+    with :math:`P(\text{hit at } p) = \sum_s p(s)\, P_p(s)` from the estimator's hit model :math:`h_p(s)` (the same
+    predictive as above) and :math:`L_g` its update factor. For a Bayes update :math:`L_g = P(g \mid s)` and this is the
+    mutual information again (the two definitions of infotaxis, Vergassola et al. 2007, coincide); for PMFS it may be
+    negative (a reading expected to spread the posterior). Exact, one pass over the free cells per candidate and
+    outcome."""
     factors = _reading_factors(sit, cells)
     post = sit.posterior.ravel()
     if factors is not None:
@@ -503,7 +528,7 @@ def _best(score, cells, pred, drive, sit, *, headings=None, flat=None):
 
 
 def infotaxis_gain(sit: Situation, cells):
-    """G(p) of infotaxis, (K, n_headings): P_f H(S) + (1 − P_f)(φ_G + φ_O), nats."""
+    r"""G(p) of infotaxis, (K, n_headings): :math:`P_f\, H(S) + (1 - P_f)(\varphi_G + \varphi_O)`, nats."""
     p_f, _ = _found_mass(sit, cells)
     phi_g = olfactory_gain(sit, cells)
     phi_o = _view_information(sit, cells)
