@@ -61,6 +61,7 @@ from pathlib import Path
 import numpy as np
 import scipy.ndimage as ndi
 
+from .._shared._fpenv import preserved_float_environment
 from .._shared._validate import positive
 from ..geometry._grid import GridMap
 from ._house import House
@@ -192,7 +193,20 @@ def _simulate(obstacle: np.ndarray, inlet: np.ndarray, outlet: np.ndarray, *, re
     The one set-up of the solver: :func:`cfd_wind` and the channel-flow validation both come through here.
     ``obstacle``, ``inlet`` and ``outlet`` are disjoint (H, W) masks in the map's (row = y, col = x) layout; the
     border of the map is a wall outside them.
+
+    pystencils builds the kernels with gcc's ``-Ofast``, whose start-up code switches the loading thread to flush
+    subnormals to zero; the solve runs inside :func:`~psgsl_pgm._shared._fpenv.preserved_float_environment`, so
+    the rest of the process computes in IEEE 754 as before it.
     """
+    with preserved_float_environment():
+        return _run_lattice(obstacle, inlet, outlet, resolution=resolution, speed=speed, times=times,
+                            spin_up=spin_up, gust_intensity=gust_intensity, gust_angle=gust_angle, seed=seed,
+                            omega0=omega0, smagorinsky=smagorinsky)
+
+
+def _run_lattice(obstacle, inlet, outlet, *, resolution, speed, times, spin_up, gust_intensity, gust_angle, seed,
+                 omega0, smagorinsky) -> np.ndarray:
+    """The body of :func:`_simulate` (same arguments and result)."""
     _lbmpy()
     _check_compiler()
     from lbmpy import LBMConfig, LBStencil, Method, Stencil, SubgridScaleModel

@@ -212,3 +212,47 @@ def test_filaments_go_round_the_furniture_that_blocks_the_flow(house_wind):
     assert np.array_equal(plain.gas.source, oven.center)  # without: released at the oven's centre, as before
     with pytest.raises(ValueError, match="gas_obstacles must be an"):
         make_world(house, wind=wind, warm_up=0.0, gas_obstacles=obstacle[1:])
+
+
+_SOLVE_IN_A_FRESH_PROCESS = """
+import sys
+import numpy as np
+from psgsl_pgm._shared._fpenv import subnormals_work
+from psgsl_pgm.sim import GridMap, House, cfd_wind
+from psgsl_pgm.sim import _lbm
+occ = np.zeros((6, 14), bool); occ[0] = occ[-1] = True
+inlet, outlet = np.zeros_like(occ), np.zeros_like(occ)
+inlet[1:-1, 0] = outlet[1:-1, -1] = True
+house = House(GridMap(occ, 0.1), np.full(occ.shape, -1), (), (), inlet, outlet, classes=("other",))
+assert subnormals_work()
+if sys.argv[1] == "guarded":
+    cfd_wind(house, duration=2.0, snapshot_period=1.0, cache_dir=sys.argv[2])
+else:
+    _lbm._run_lattice(occ & ~inlet & ~outlet, inlet, outlet, resolution=0.1, speed=0.2, times=np.array([0.0]),
+                      spin_up=1.0, gust_intensity=0.0, gust_angle=0.0, seed=0, omega0=_lbm.OMEGA0,
+                      smagorinsky=_lbm.SMAGORINSKY)
+print(subnormals_work())
+"""
+
+
+def _subnormals_after_a_solve(how, tmp_path):
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", _SOLVE_IN_A_FRESH_PROCESS, how, str(tmp_path)], capture_output=True,
+                         text=True, timeout=600, check=True)
+    return out.stdout.strip().splitlines()[-1]
+
+
+@pytest.mark.slow  # a fresh interpreter imports lbmpy and builds its kernels: 10-15 s
+def test_a_cfd_solve_leaves_the_process_computing_with_subnormals(tmp_path):
+    """lbmpy's kernels are built with -Ofast, whose start-up code sets FTZ/DAZ when they are loaded: the solve
+    restores the floating-point environment, so an episode computes the same numbers whether its wind was solved
+    in this process or loaded from the cache (each case in a fresh process: a kernel is loaded once per process)."""
+    assert _subnormals_after_a_solve("guarded", tmp_path) == "True"
+
+
+@pytest.mark.slow
+def test_the_solver_alone_would_flush_subnormals(tmp_path):
+    """The reason for the guard above: the same lattice run outside it leaves subnormals flushed to zero. If this
+    fails, pystencils no longer builds with fast math and the guard is no longer needed."""
+    assert _subnormals_after_a_solve("bare", tmp_path) == "False"
