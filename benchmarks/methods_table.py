@@ -20,6 +20,13 @@ from psgsl_pgm.search._store import load_search_run
 from psgsl_pgm.search._survival import rmst
 
 
+def _cpu_seconds(run):
+    """The run's CPU seconds: ``psgsl benchmark`` stores them under ``benchmark``, ``psgsl search`` at the top of
+    the config; None for runs stored before either recorded them."""
+    value = (run.config.get("benchmark") or {}).get("cpu_seconds", run.config.get("cpu_seconds"))
+    return None if value is None else float(value)
+
+
 def _cell(runs, budget):
     n = len(runs)
     ok = sum(bool(r.succeeded) for r in runs)
@@ -27,8 +34,7 @@ def _cell(runs, budget):
     m = rmst(t, [bool(r.succeeded) for r in runs], budget)
     lo, hi = m["ci95"]
     err = [float(r.declared_error) for r in runs if r.declared]
-    cpu = [r.config["benchmark"]["cpu_seconds"] / max(len(r.time), 1) for r in runs
-           if (r.config.get("benchmark") or {}).get("cpu_seconds") is not None]
+    cpu = [s / max(len(r.time), 1) for r in runs if (s := _cpu_seconds(r)) is not None]
     rm = f"{m['value']:.0f}" if ok == 0 else f"{m['value']:.0f} [{max(lo, 0):.0f}, {min(hi, budget):.0f}]"
     e = f"{np.median(err):.2f}" if err else "—"
     c = f"{np.mean(cpu):.2f}" if cpu else "—"

@@ -157,6 +157,10 @@ def test_a_search_grid_runs_reactive_policies_with_olfaction_only(tmp_path):
     runs = sorted(p.name for p in (tmp_path / "out" / "runs").iterdir())
     assert len(runs) == 2 and all("olfaction" in r and "semantics" not in r for r in runs), runs
     assert summary
+    from psgsl_pgm.search import load_search_run  # each stored run carries the CPU it took (methods' CPU/decision)
+
+    cpu = [load_search_run(p).config["cpu_seconds"] for p in sorted((tmp_path / "out" / "runs").iterdir())]
+    assert all(isinstance(c, float) and 0 < c < 600 for c in cpu), cpu
 
 
 def test_the_benchmark_refuses_reactive_policies_without_the_olfaction_variant(tmp_path):
