@@ -181,6 +181,20 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     Returns
     -------
     Calibration
+
+    Examples
+    --------
+    The default call walks 20 calibration tours in the simulator and fits on them (minutes); the numbers it gives
+    are in ``ExperimentConfig``'s defaults, and ``docs/guide/field-methods.md`` says how each was found. The fit
+    it runs on the readings, shown on hand-made residuals, is :func:`psgsl_pgm.olfaction.ar1_tempering`'s:
+
+    >>> from psgsl_pgm.experiment import CALIBRATION_RUNS
+    >>> from psgsl_pgm.olfaction import ar1_tempering
+    >>> CALIBRATION_RUNS[0]                                    # (seed, source) of the first calibration run
+    (1000, 'toilet')
+    >>> rho, beta = ar1_tempering([[1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0]])
+    >>> round(beta, 3)                                         # the tempering of correlated readings
+    0.778
     """
     config = ExperimentConfig() if config is None else config
     data = calibration_runs(runs, config=config)
@@ -231,6 +245,22 @@ def parameter_grid_weights(data, *, tempering: float, false_hit_rate: float, axe
     Returns
     -------
     tuple of (D, τ, κ, weight)
+
+    Raises
+    ------
+    ValueError
+        ``data`` is empty, or :func:`psgsl_pgm.olfaction.mixture_weights` refuses the log-likelihoods (a run that
+        no grid point explains) or ``tempering``.
+
+    Examples
+    --------
+    Its input is a list of calibration runs (:func:`calibration_runs`, a simulated tour each: seconds per run), so
+    the call itself is run by :func:`calibrate`. The weights it returns come from
+    :func:`psgsl_pgm.olfaction.mixture_weights`, here on two runs that prefer grid point 0 and one that prefers 1:
+
+    >>> from psgsl_pgm.olfaction import mixture_weights
+    >>> [round(float(v), 3) for v in mixture_weights([[0.0, -50.0], [-50.0, 0.0], [0.0, -50.0]])]
+    [0.667, 0.333]
     """
     axes = GRID_AXES if axes is None else axes
     data = list(data)
@@ -343,6 +373,20 @@ def tempered_posterior(log_prior, log_likelihoods, tempering: float, *, weights=
     -------
     (N,) ndarray of float64
         Sums to 1; 0 off the support.
+
+    Raises
+    ------
+    ValueError
+        ``log_likelihoods`` is not (J, N) with ``log_prior``'s N, ``tempering`` is not positive, or ``weights`` are
+        not J non-negative values with a positive sum.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import tempered_posterior
+    >>> log_prior = np.log([0.5, 0.5, 1e-300])                 # the third cell is all but ruled out
+    >>> tempered_posterior(log_prior, [0.0, -2.0, 0.0], 0.5).round(4)     # β = 1/2: exp(-1) against 1
+    array([0.7311, 0.2689, 0.    ])
     """
     from scipy.special import logsumexp
 
@@ -480,6 +524,22 @@ def coverage_tempering(thresholds, groups, *, target: float = 0.9, n_boot: int =
     Returns
     -------
     CoverageTempering
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 thresholds, a threshold that is not positive and finite, ``groups`` of another length, or
+        ``target`` outside (0, 1).
+
+    Examples
+    --------
+    Five calibration posteriors, one per run: the largest tempering that keeps 4 of their 5 regions on the source
+    lies between the 4th and the 5th largest threshold:
+
+    >>> from psgsl_pgm.experiment import coverage_tempering
+    >>> fit = coverage_tempering([0.5, 1.0, 2.0, 4.0, 8.0], [0, 1, 2, 3, 4], target=0.8, n_boot=200)
+    >>> round(fit.tempering, 4), fit.coverage
+    (0.7071, 0.8)
     """
     b = np.asarray(thresholds, dtype=np.float64).ravel()
     g = np.asarray(groups).ravel()

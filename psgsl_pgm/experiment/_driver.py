@@ -140,6 +140,18 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     ------
     psgsl_pgm.runs._runner.GridInterrupted
         On Ctrl-C; the finished runs are on disk and the same call resumes.
+
+    Examples
+    --------
+    Each run is a whole tour (about a minute), so a grid is shown in ``docs/guide/scaling-out.md`` and
+    ``docs/guide/robot-data.md`` (``psgsl experiment``). What the call refuses it refuses before any run starts:
+
+    >>> from psgsl_pgm.experiment import run_experiment
+    >>> try:
+    ...     run_experiment(estimators=("kalman",), out="never-created")
+    ... except ValueError as err:
+    ...     print(str(err).startswith("estimators must be among"))
+    True
     """
     config = ExperimentConfig() if config is None else config
     sources = [parse_source(s) for s in sources]

@@ -38,6 +38,12 @@ def error_and_spread(posteriors, centres, truth):
         Metres. The spread is the paper's "standard deviation of the distribution" (its error bars): the root
         of the trace of the covariance of s.
 
+    Raises
+    ------
+    ValueError
+        ``posteriors`` are not non-negative distributions over the (H, W) cells, ``centres`` are not (H, W, 2)
+        finite centres, ``truth`` is not a finite (x, y), or the result exceeds the float64 range.
+
     Examples
     --------
     >>> import numpy as np
