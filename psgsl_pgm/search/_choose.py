@@ -37,6 +37,19 @@ def choose(policy: str, sit: Situation) -> Decision:
     ------
     ValueError
         ``policy`` is ``"tour"`` or not a policy name.
+
+    Examples
+    --------
+    The situation of a closed-loop episode after its first stop (the loop asks the same at every stop):
+
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import choose
+    >>> from psgsl_pgm.search._stepper import ClosedLoopEpisode
+    >>> episode = ClosedLoopEpisode("oven", 0, None, "semantics+rooms", config=ExperimentConfig(warm_up=5.0))
+    >>> episode.take(episode.first_move())
+    >>> decision = choose("nearest-object", episode.situation())
+    >>> decision.drive > 0, len(decision.headings)             # metres to the next stop, camera headings there
+    (True, 1)
     """
     if policy == "greedy":
         return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell
