@@ -254,13 +254,21 @@ def parameter_grid_weights(data, *, tempering: float, false_hit_rate: float, axe
 
     Examples
     --------
-    Its input is a list of calibration runs (:func:`calibration_runs`, a simulated tour each: seconds per run), so
-    the call itself is run by :func:`calibrate`. The weights it returns come from
-    :func:`psgsl_pgm.olfaction.mixture_weights`, here on two runs that prefer grid point 0 and one that prefers 1:
+    One calibration run in a corridor (the source at its west end, the wind blowing east) and a grid of two
+    diffusivities; the run's hits near the source and misses far from it leave the larger one a weight below
+    ``drop``, so only the smaller one is kept:
 
-    >>> from psgsl_pgm.olfaction import mixture_weights
-    >>> [round(float(v), 3) for v in mixture_weights([[0.0, -50.0], [-50.0, 0.0], [0.0, -50.0]])]
-    [0.667, 0.333]
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import parameter_grid_weights
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeModel
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> rows = parameter_grid_weights([run], tempering=0.5, false_hit_rate=0.01,
+    ...                               axes={"diffusivity": (0.01, 0.1), "lifetime": (30.0,), "encounter_scale": (0.2,)})
+    >>> [(d, round(w, 3)) for d, _, _, w in rows]
+    [(0.01, 1.0)]
     """
     axes = GRID_AXES if axes is None else axes
     data = list(data)
