@@ -41,8 +41,8 @@ def run_search_demo(out, *, seeds=DEMO_SEARCH_SEEDS, budget: float = DEMO_BUDGET
     Examples
     --------
     Its default (three seeds, 300 s each, two arms) takes minutes, and even one seed with a 20-s budget takes
-    several seconds, so the demo is run in ``docs/guide/closed-loop.md`` (``psgsl search --demo``). The summary it
-    returns has the form of the stored closed-loop grid's, which ships with the package:
+    several seconds; ``psgsl demo`` ends with it (``docs/guide/closed-loop.md``). The summary it returns has the form
+    of the stored closed-loop grid's, which ships with the package:
 
     >>> from psgsl_pgm.teaching import closed_loop_results
     >>> summary, _ = closed_loop_results(source="oven")

@@ -330,8 +330,8 @@ def cfd_wind(house, *, speed: float = 0.2, duration: float = 600.0, seed: int = 
     Examples
     --------
     A solve derives and compiles the lattice kernels (5-8 s) and then runs 8-18 s per house on one core, too long
-    for an example here; ``docs/guide/world-models.md`` runs the ``cfd-wind`` world model. The arguments are
-    checked before anything is solved:
+    for an example here; ``docs/guide/world-models.md`` shows how a world uses it (the ``cfd-wind`` component,
+    ``model: realistic``). The arguments are checked before anything is solved:
 
     >>> from psgsl_pgm.sim import cfd_wind, default_house
     >>> try:
