@@ -187,10 +187,11 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
         ``bag`` or ``world`` does not exist.
     ValueError
         ``bag`` is not a readable ROS 2 bag or holds bad messages (see :func:`psgsl_pgm.ros.read_bag`); ``world`` is
-        refused by :func:`psgsl_pgm.sim.load_world`; an unknown ``estimator``, a negative ``seed``, a ``threshold`` that is not positive, ``bag_map`` without a
-        map in the bag, a ``source`` outside the map, or a bad ``gas_conversion``.
+        refused by :func:`psgsl_pgm.sim.load_world`; an unknown ``estimator``, a negative ``seed``, a
+        ``threshold`` that is not positive, ``bag_map`` without a map in the bag, a ``source`` outside the map, or
+        a bad ``gas_conversion``.
     TypeError
-        ``config`` is not an :class:`ExperimentConfig`.
+        ``config`` is not an :class:`ExperimentConfig`, or ``gas_conversion`` does not hold two numbers.
     ImportError
         The ``ros`` extra is not installed.
 
@@ -210,7 +211,7 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
     ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[])
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     result = replay(write_bag(Path(folder) / "hall.bag", episode), source="oven")
-    >>> result.run.n_steps, result.run.hit.tolist()                      # gas above 1 ppm at the 1st and 3rd
+    >>> result.run.n_steps, result.run.hit.tolist()          # step 0 is the start; gas above 1 ppm at readings 1, 3
     (4, [False, True, False, True, False])
     """
     from ..ros import DEFAULT_TOLERANCE, read_bag

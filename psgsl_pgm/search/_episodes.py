@@ -88,7 +88,7 @@ def robot_ontology(ontology: Ontology, condition: str, *, house: int) -> Ontolog
     >>> robot_ontology(ontology, "no-rooms", house=0).rooms
     ()
     >>> wrong = robot_ontology(ontology, "wrong-ontology", house=0)
-    >>> bool(wrong.source_likelihood("smoke")[0] != ontology.source_likelihood("smoke")[0])   # the oven's p(o | s) moved
+    >>> bool(wrong.source_likelihood("smoke")[0] != ontology.source_likelihood("smoke")[0])   # the oven's moved
     True
     """
     check_condition(condition)

@@ -449,7 +449,8 @@ def load_world(path) -> WorldSpec:
     >>> import tempfile
     >>> from pathlib import Path
     >>> from psgsl_pgm.sim import load_world
-    >>> text = "builtin: default_house\nontology: house\ngas: smoke\nwind: {speed: 0.2}\nsources: {hallway: [5.0, 6.0]}\n"
+    >>> text = ("builtin: default_house\nontology: house\ngas: smoke\nwind: {speed: 0.2}\n"
+    ...         "sources: {hallway: [5.0, 6.0]}\n")
     >>> with tempfile.TemporaryDirectory() as d:
     ...     path = Path(d) / "world.yaml"
     ...     _ = path.write_text(text)
