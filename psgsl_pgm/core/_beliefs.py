@@ -123,6 +123,14 @@ def room_evidence(room_labels, room_class_table, class_prior):
         :math:`p(o \mid \text{room}_c) / p(o)`, float64 (a room whose ratios would exceed float64, under a
         prior near 1e-310, has them scaled to a maximum of 1: the same likelihood).
 
+    Raises
+    ------
+    TypeError
+        ``room_labels`` are not integers.
+    ValueError
+        ``room_class_table`` rows or ``class_prior`` are not distributions, ``class_prior`` does not have the
+        table's k classes, a label lies outside [-1, r - 1], or a class that a room makes possible has prior 0.
+
     Examples
     --------
     >>> import numpy as np

@@ -94,6 +94,15 @@ def semantic_information_gain(
     gain : (...) ndarray
         :math:`I(S; O_n)` in nats for every cell, float64.
 
+    Raises
+    ------
+    TypeError
+        ``validate`` is not a bool.
+    ValueError
+        ``predictive`` is neither ``"paper"`` nor ``"exact"``; ``class_probs``, ``source_likelihood``,
+        ``class_prior``, ``gas_probs`` or ``olfactory`` are refused (see :func:`semantic_source_probability`); or
+        ``olfactory`` and the semantic term have no cell in common.
+
     Examples
     --------
     >>> import numpy as np

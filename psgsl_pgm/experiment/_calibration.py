@@ -131,10 +131,16 @@ def calibration_runs(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None =
 
     Examples
     --------
+    A run walks the whole tour (seconds), so ``calibration_runs([(1000, "toilet")])`` is not run here; it gives one
+    :class:`psgsl_pgm.olfaction.CalibrationRun` of 195 readings. A source the house lacks is refused before any
+    run:
+
     >>> from psgsl_pgm.experiment import calibration_runs
-    >>> data = calibration_runs([(1000, "toilet")])            # doctest: +SKIP
-    >>> len(data), data[0].positions.shape[1]                  # doctest: +SKIP
-    (1, 2)
+    >>> try:
+    ...     calibration_runs([(1000, "piano")])
+    ... except ValueError as err:
+    ...     print("piano" in str(err))
+    True
     """
     config = ExperimentConfig() if config is None else config
     runs = list(runs)
@@ -181,6 +187,20 @@ def calibrate(runs=CALIBRATION_RUNS, *, config: ExperimentConfig | None = None, 
     Returns
     -------
     Calibration
+
+    Examples
+    --------
+    The default call walks 20 calibration tours in the simulator and fits on them (minutes); the numbers it gives
+    are in ``ExperimentConfig``'s defaults, and ``docs/guide/field-methods.md`` says how each was found. The fit
+    it runs on the readings, shown on hand-made residuals, is :func:`psgsl_pgm.olfaction.ar1_tempering`'s:
+
+    >>> from psgsl_pgm.experiment import CALIBRATION_RUNS
+    >>> from psgsl_pgm.olfaction import ar1_tempering
+    >>> CALIBRATION_RUNS[0]                                    # (seed, source) of the first calibration run
+    (1000, 'toilet')
+    >>> rho, beta = ar1_tempering([[1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0]])
+    >>> round(beta, 3)                                         # the tempering of correlated readings
+    0.778
     """
     config = ExperimentConfig() if config is None else config
     data = calibration_runs(runs, config=config)
@@ -231,6 +251,30 @@ def parameter_grid_weights(data, *, tempering: float, false_hit_rate: float, axe
     Returns
     -------
     tuple of (D, τ, κ, weight)
+
+    Raises
+    ------
+    ValueError
+        ``data`` is empty, or :func:`psgsl_pgm.olfaction.mixture_weights` refuses the log-likelihoods (a run that
+        no grid point explains) or ``tempering``.
+
+    Examples
+    --------
+    One calibration run in a corridor (the source at its west end, the wind blowing east) and a grid of two
+    diffusivities; the run's hits near the source and misses far from it leave the larger one a weight below
+    ``drop``, so only the smaller one is kept:
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import parameter_grid_weights
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeModel
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> rows = parameter_grid_weights([run], tempering=0.5, false_hit_rate=0.01,
+    ...                               axes={"diffusivity": (0.01, 0.1), "lifetime": (30.0,), "encounter_scale": (0.2,)})
+    >>> [(d, round(w, 3)) for d, _, _, w in rows]
+    [(0.01, 1.0)]
     """
     axes = GRID_AXES if axes is None else axes
     data = list(data)
@@ -286,11 +330,17 @@ def calibrate_encounter_scale(runs=CALIBRATION_RUNS, *, config: ExperimentConfig
 
     Examples
     --------
-    The default calibration runs take about a minute on one core:
+    The default calibration runs take about a minute on one core, so the call is not run here. On the runs it
+    makes, it profiles κ out of the likelihood at ``config``'s D and τ, as here on one hand-made corridor run:
 
-    >>> from psgsl_pgm.experiment import calibrate_encounter_scale
-    >>> kappa = calibrate_encounter_scale()                    # doctest: +SKIP
-    >>> kappa > 0                                              # doctest: +SKIP
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeModel, profile_log_likelihood
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> kappa, _ = profile_log_likelihood([run], 0.01, 30.0, false_hit_rate=0.01)
+    >>> bool(kappa > 0)
     True
     """
     config = ExperimentConfig() if config is None else config
@@ -343,6 +393,20 @@ def tempered_posterior(log_prior, log_likelihoods, tempering: float, *, weights=
     -------
     (N,) ndarray of float64
         Sums to 1; 0 off the support.
+
+    Raises
+    ------
+    ValueError
+        ``log_likelihoods`` is not (J, N) with ``log_prior``'s N, ``tempering`` is not positive, or ``weights`` are
+        not J non-negative values with a positive sum.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import tempered_posterior
+    >>> log_prior = np.log([0.5, 0.5, 1e-300])                 # the third cell is all but ruled out
+    >>> tempered_posterior(log_prior, [0.0, -2.0, 0.0], 0.5).round(4)     # β = 1/2: exp(-1) against 1
+    array([0.7311, 0.2689, 0.    ])
     """
     from scipy.special import logsumexp
 
@@ -480,6 +544,22 @@ def coverage_tempering(thresholds, groups, *, target: float = 0.9, n_boot: int =
     Returns
     -------
     CoverageTempering
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 thresholds, a threshold that is not positive and finite, ``groups`` of another length, or
+        ``target`` outside (0, 1).
+
+    Examples
+    --------
+    Five calibration posteriors, one per run: the largest tempering that keeps 4 of their 5 regions on the source
+    lies between the 4th and the 5th largest threshold:
+
+    >>> from psgsl_pgm.experiment import coverage_tempering
+    >>> fit = coverage_tempering([0.5, 1.0, 2.0, 4.0, 8.0], [0, 1, 2, 3, 4], target=0.8, n_boot=200)
+    >>> round(fit.tempering, 4), fit.coverage
+    (0.7071, 0.8)
     """
     b = np.asarray(thresholds, dtype=np.float64).ravel()
     g = np.asarray(groups).ravel()
@@ -554,13 +634,18 @@ def coverage_thresholds(data, fit: PlumeFit, estimator: str, *, false_hit_rate: 
 
     Examples
     --------
-    On the default calibration runs (about a minute each for the runs, seconds for the replay):
+    On the default calibration runs (:func:`calibration_runs`) the runs take seconds each; here one hand-made
+    corridor run (the source at its west end, the wind blowing east, readings near it hit):
 
-    >>> from psgsl_pgm.experiment import calibration_runs, coverage_thresholds
-    >>> from psgsl_pgm.olfaction import PlumeFit
-    >>> data = calibration_runs([(1000, "toilet")])                          # doctest: +SKIP
-    >>> coverage_thresholds(data, PlumeFit(0.0131, 284.0, 0.821, 0.0), "infotaxis").shape  # doctest: +SKIP
-    (1, 4)
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import coverage_thresholds
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeFit, PlumeModel
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> coverage_thresholds([run], PlumeFit(0.01, 30.0, 0.2, 0.0), "infotaxis").round(2)
+    array([[ 9.29, 10.  , 10.  , 10.  ]])
     """
     from ..olfaction import GridInfotaxis
 

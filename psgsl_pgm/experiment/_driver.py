@@ -140,6 +140,18 @@ def run_experiment(sources=("oven",), seeds=range(10), estimators=("infotaxis",)
     ------
     psgsl_pgm.runs._runner.GridInterrupted
         On Ctrl-C; the finished runs are on disk and the same call resumes.
+
+    Examples
+    --------
+    Each run is a whole tour (about a minute), so a grid is shown in ``docs/guide/scaling-out.md`` and
+    ``docs/guide/robot-data.md`` (``psgsl experiment``). What the call refuses it refuses before any run starts:
+
+    >>> from psgsl_pgm.experiment import run_experiment
+    >>> try:
+    ...     run_experiment(estimators=("kalman",), out="never-created")
+    ... except ValueError as err:
+    ...     print(str(err).startswith("estimators must be among"))
+    True
     """
     config = ExperimentConfig() if config is None else config
     sources = [parse_source(s) for s in sources]
@@ -214,12 +226,18 @@ def write_outputs(out, *, flat: bool = False, world=None) -> dict:
 
     Examples
     --------
-    After :func:`run_experiment` (or ``psgsl experiment --out DIR``) has stored its runs:
+    After :func:`run_experiment` (or ``psgsl experiment --out DIR``) has stored its runs, ``write_outputs(DIR)``
+    returns ``{"oven/infotaxis": summary, ...}``; drawing the figures takes seconds, so ``docs/guide/robot-data.md``
+    runs it (``psgsl experiment``). A folder without runs is refused:
 
+    >>> import tempfile
     >>> from psgsl_pgm.experiment import write_outputs
-    >>> summaries = write_outputs("experiment-out")             # doctest: +SKIP
-    >>> sorted(summaries)                                       # doctest: +SKIP
-    ['oven/infotaxis']
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     try:
+    ...         write_outputs(out)
+    ...     except ValueError as err:
+    ...         print(str(err).startswith("no runs stored in"))
+    True
     """
     import matplotlib.pyplot as plt
 
@@ -296,12 +314,16 @@ def run_demo(out, *, seeds=DEMO_SEEDS, workers: int = 2, estimator: str = "infot
 
     Examples
     --------
-    About a minute per seed:
+    About a minute per seed (``psgsl demo``, ``docs/getting-started.md``), so the call is not run here;
+    ``run_demo("psgsl-demo", seeds=(0,), workers=1, progress=False)["n_runs"]`` is 1. Its arguments are checked
+    before any run:
 
     >>> from psgsl_pgm.experiment import run_demo
-    >>> summary = run_demo("psgsl-demo", seeds=(0,), workers=1, progress=False)  # doctest: +SKIP
-    >>> summary["n_runs"]                                                        # doctest: +SKIP
-    1
+    >>> try:
+    ...     run_demo("never-created", estimator="kalman")
+    ... except ValueError as err:
+    ...     print(str(err).startswith("estimators must be among"))
+    True
     """
     seeds = [int(s) for s in seeds]
     out = Path(out)

@@ -35,6 +35,18 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
     Returns
     -------
     matplotlib Figure
+
+    Examples
+    --------
+    One short run (two stops of the tour, 5 s of gas before it):
+
+    >>> import matplotlib.pyplot as plt
+    >>> from psgsl_pgm.experiment import ExperimentConfig, plot_error_chart, run_search
+    >>> run = run_search("oven", 0, config=ExperimentConfig(stops=2, warm_up=5.0))
+    >>> fig = plot_error_chart([run])
+    >>> fig.axes[0].get_ylabel()
+    '‖E[s] − s_true‖  (m)'
+    >>> plt.close(fig)
     """
     import matplotlib.pyplot as plt
 
@@ -92,6 +104,25 @@ def plot_progression(run, house, tour, *, variants=("olfaction", "semantics+room
     Returns
     -------
     matplotlib Figure
+
+    Raises
+    ------
+    ValueError
+        ``run`` kept no snapshots, or ``scale`` is neither ``"figure"`` nor ``"row"``.
+
+    Examples
+    --------
+    One short run (two stops of the tour) with the posteriors kept before the first stop and at the end:
+
+    >>> import matplotlib.pyplot as plt
+    >>> from psgsl_pgm.experiment import ExperimentConfig, exploration_tour, plot_progression, run_search
+    >>> from psgsl_pgm.sim import default_house
+    >>> run = run_search("oven", 0, config=ExperimentConfig(stops=2, warm_up=5.0), snapshot_at=(0.0, 1.0))
+    >>> house = default_house(0)
+    >>> fig = plot_progression(run, house, exploration_tour(house).first(2))
+    >>> len(fig.axes)                                          # 2 variants x 2 snapshots, and the colour bar
+    5
+    >>> plt.close(fig)
     """
     import matplotlib.pyplot as plt
 
@@ -146,6 +177,22 @@ def plot_room_types(semantic_plain, semantic_rooms, house, *, source=None):
     Returns
     -------
     matplotlib Figure
+
+    Examples
+    --------
+    Two made-up distributions over the free cells of the default house (uniform, and twice as likely in the
+    kitchen):
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.experiment import plot_room_types
+    >>> from psgsl_pgm.sim import default_house
+    >>> house = default_house(seed=0)
+    >>> plain = (~house.grid.occupancy).astype(float); plain /= plain.sum()
+    >>> rooms = plain * np.where(house.room_labels == house.room_names.index("Kitchen"), 2.0, 1.0); rooms /= rooms.sum()
+    >>> fig = plot_room_types(plain, rooms, house, source=(7.0, 1.0))
+    >>> [ax.get_title() for ax in fig.axes[:2]]
+    ['(A) no previous information', '(B) room-category map']
+    >>> import matplotlib.pyplot as plt; plt.close(fig)
     """
     import matplotlib.pyplot as plt
 

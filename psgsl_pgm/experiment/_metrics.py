@@ -38,6 +38,12 @@ def error_and_spread(posteriors, centres, truth):
         Metres. The spread is the paper's "standard deviation of the distribution" (its error bars): the root
         of the trace of the covariance of s.
 
+    Raises
+    ------
+    ValueError
+        ``posteriors`` are not non-negative distributions over the (H, W) cells, ``centres`` are not (H, W, 2)
+        finite centres, ``truth`` is not a finite (x, y), or the result exceeds the float64 range.
+
     Examples
     --------
     >>> import numpy as np
@@ -97,6 +103,11 @@ def credible_region(posterior, mass: float = 0.9) -> np.ndarray:
     region : ndarray of bool, the posterior's shape
         Ties at the boundary are broken by cell order (the region has the minimal number of cells).
 
+    Raises
+    ------
+    ValueError
+        ``mass`` is not in (0, 1), or ``posterior`` is not a distribution (finite, non-negative, summing to 1).
+
     Examples
     --------
     >>> credible_region([0.5, 0.1, 0.3, 0.1], 0.75).tolist()
@@ -142,6 +153,12 @@ def hpd_level(posterior, cell) -> float:
         A distribution over cells.
     cell : int
         Flat (C-order) index of the cell.
+
+    Raises
+    ------
+    ValueError
+        ``cell`` is not a flat index of ``posterior``, or ``posterior`` is not finite and non-negative with a
+        positive total.
 
     Examples
     --------

@@ -27,6 +27,14 @@ def reliability_table(predicted, hits, *, bins=(0.0, 0.02, 0.05, 0.1, 0.2, 0.4, 
         ``edges`` (B + 1,), and per bin: ``n`` readings, ``hits``, ``mean_predicted`` (NaN where empty),
         ``observed`` = hits / n and its 95 % Wilson interval ``lower``, ``upper`` (NaN where empty).
 
+    Raises
+    ------
+    TypeError
+        ``hits`` are not booleans.
+    ValueError
+        ``predicted`` are not probabilities of ``hits``' shape, or ``bins`` are not increasing edges covering
+        [0, 1].
+
     Examples
     --------
     >>> t = reliability_table([0.1, 0.1, 0.9, 0.9], [False, True, True, True], bins=(0.0, 0.5, 1.0))

@@ -180,6 +180,39 @@ def replay(bag, *, world=None, source=None, estimator: str | None = None, config
     Returns
     -------
     ReplayResult
+
+    Raises
+    ------
+    FileNotFoundError
+        ``bag`` or ``world`` does not exist.
+    ValueError
+        ``bag`` is not a readable ROS 2 bag or holds bad messages (see :func:`psgsl_pgm.ros.read_bag`); ``world`` is
+        refused by :func:`psgsl_pgm.sim.load_world`; an unknown ``estimator``, a negative ``seed``, a
+        ``threshold`` that is not positive, ``bag_map`` without a map in the bag, a ``source`` outside the map, or
+        a bad ``gas_conversion``.
+    TypeError
+        ``config`` is not an :class:`ExperimentConfig`, or ``gas_conversion`` does not hold two numbers.
+    ImportError
+        The ``ros`` extra is not installed.
+
+    Examples
+    --------
+    A 4-reading episode in the default house's hallway, written as a bag and replayed:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.experiment import replay
+    >>> from psgsl_pgm.ros import Episode, write_bag
+    >>> from psgsl_pgm.sim import default_house
+    >>> t = np.arange(4.0)                                                  # s
+    >>> pose = np.stack([1.0 + 0.5 * t, np.full(4, 6.0), np.zeros(4)], axis=-1)  # along the hallway, m
+    >>> episode = Episode(grid=default_house(0).grid, pose_t=t, pose=pose, gas_t=t, gas=[2.0, 0.5, 2.0, 0.5],
+    ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     result = replay(write_bag(Path(folder) / "hall.bag", episode), source="oven")
+    >>> result.run.n_steps, result.run.hit.tolist()          # step 0 is the start; gas above 1 ppm at readings 1, 3
+    (4, [False, True, False, True, False])
     """
     from ..ros import DEFAULT_TOLERANCE, read_bag
 

@@ -220,6 +220,11 @@ def robot_gas_confusion(gases, *, exposures: int = GAS_EXPOSURES, seed: int = 0,
     edges : (B + 1,) ndarray
         :data:`STRENGTH_EDGES`.
 
+    Raises
+    ------
+    TypeError
+        ``gases`` is one string instead of a sequence of names.
+
     Examples
     --------
     >>> conf, edges = robot_gas_confusion(("smoke", "ammonia"), exposures=2000)

@@ -120,6 +120,22 @@ def run_search(source="oven", seed: int = 0, estimator: str = "infotaxis", *, co
     Returns
     -------
     RunResult
+
+    Raises
+    ------
+    TypeError
+        ``config`` is not an :class:`ExperimentConfig`, or ``seed`` is not an integer.
+    ValueError
+        An unknown ``estimator`` or source, or ``snapshot_at`` holds a value outside [0, 1].
+
+    Examples
+    --------
+    Two stops of the tour after 5 s of gas (a whole tour takes about a minute):
+
+    >>> from psgsl_pgm.experiment import ExperimentConfig, run_search
+    >>> run = run_search("oven", 0, config=ExperimentConfig(stops=2, warm_up=5.0))
+    >>> run.n_steps, run.error.shape                           # steps 0..2, one column per variant
+    (2, (3, 3))
     """
     config, spec, setting, world = start_run(source, seed, estimator, config, world=world, world_spec=world_spec)
     if recorder is not None:

@@ -37,6 +37,17 @@ def check_sources(sources, *, seeds=(0,), house=None) -> list:
     ValueError
         An unknown class (naming the classes present) or a position outside the map or in an occupied cell
         (naming the map's extent).
+
+    Examples
+    --------
+    >>> from psgsl_pgm.experiment import check_sources
+    >>> check_sources(["oven", (5.0, 6.0)])                    # a class of the house and a free position
+    ['oven', (5.0, 6.0)]
+    >>> try:
+    ...     check_sources(["piano"])
+    ... except ValueError as err:
+    ...     print("piano" in str(err))
+    True
     """
 
     specs = [parse_source(s) for s in sources]

@@ -96,6 +96,11 @@ def exploration_tour(house, *, start=(0.8, 6.0), waypoint_spacing: float = 1.6, 
     -------
     Tour
 
+    Raises
+    ------
+    ValueError
+        A spacing or ``clearance`` that is not a positive number, or a ``start`` that is not a navigable position.
+
     Examples
     --------
     >>> from psgsl_pgm.sim import default_house

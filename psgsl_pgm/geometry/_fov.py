@@ -60,6 +60,14 @@ def field_of_view(occupancy, pose, *, max_range, half_angle, min_range=0.0, reso
     -------
     visible : (H, W) ndarray of bool
 
+    Raises
+    ------
+    TypeError
+        ``occupancy`` is not boolean (or 0/1).
+    ValueError
+        ``pose`` is not a finite (x, y, heading) inside the map; ``max_range``, ``min_range``, ``half_angle`` or
+        ``resolution`` is not a number in its range (``min_range`` ≤ ``max_range``, ``half_angle`` in (0, π]).
+
     Examples
     --------
     >>> import numpy as np
@@ -348,11 +356,30 @@ def view_information_gain(information_gain, occupancy, pose, **fov):
     phi : float or (P,) ndarray
         :math:`\varphi_O` for the pose, or for each candidate pose.
 
+    Raises
+    ------
+    TypeError
+        ``occupancy`` is not boolean (as for :func:`field_of_view`), or ``max_range`` or ``half_angle`` is missing.
+    ValueError
+        A pose or an option is refused as by :func:`field_of_view`, or ``information_gain`` is not finite or not of
+        the map's shape.
+
     Notes
     -----
     The line of sight from each camera cell does not depend on the heading or the exact pose in the cell: it
     is cast once per cell and kept in the process-wide :meth:`ViewCache.shared` cache of this map and camera,
     so a planner that scores many headings, or the same places at every step, pays for the shadow casts once.
     Equal to the per-pose sum over :func:`field_of_view`, bit for bit.
+
+    Examples
+    --------
+    A wall at column 3; only the cells right of it are worth looking at:
+
+    >>> import numpy as np
+    >>> from psgsl_pgm import view_information_gain
+    >>> occ = np.zeros((5, 7), bool); occ[:, 3] = True
+    >>> gain = np.zeros((5, 7)); gain[:, 4:] = 0.1                  # I(S; O_n), nats; 15 cells right of the wall
+    >>> view_information_gain(gain, occ, [(1.5, 2.5, 0.0), (5.5, 2.5, np.pi)], max_range=10, half_angle=np.pi).round(2)
+    array([0. , 1.5])
     """
     return ViewCache.shared(occupancy, **fov).information_gain(information_gain, pose)

@@ -48,6 +48,11 @@ def cells_clear(occupancy: np.ndarray, rc0, rc1) -> np.ndarray:
     -------
     clear : (n,) ndarray of bool
 
+    Raises
+    ------
+    ValueError
+        ``rc0`` and ``rc1`` differ in shape, or an end lies outside the grid.
+
     Examples
     --------
     >>> import numpy as np

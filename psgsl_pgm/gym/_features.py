@@ -37,6 +37,11 @@ def downsample_belief(posterior, size: int) -> np.ndarray:
     -------
     (S, S) ndarray of float64
 
+    Raises
+    ------
+    ValueError
+        ``posterior`` is not a finite, non-negative (H, W) map, or ``size`` is not an integer >= 1.
+
     Examples
     --------
     >>> p = np.full((4, 6), 1 / 24)
@@ -104,6 +109,19 @@ def candidate_table(situation, *, slots: int) -> Candidates:
     Returns
     -------
     Candidates
+
+    Examples
+    --------
+    The situation of a closed-loop episode after its first stop:
+
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.gym import candidate_table
+    >>> from psgsl_pgm.search._stepper import ClosedLoopEpisode
+    >>> episode = ClosedLoopEpisode("oven", 0, None, "semantics+rooms", config=ExperimentConfig(warm_up=5.0))
+    >>> episode.take(episode.first_move())
+    >>> c = candidate_table(episode.situation(), slots=4)
+    >>> c.table.shape, c.mask.tolist()                          # one row of features per slot, all filled
+    ((4, 5), [True, True, True, True])
     """
     sit = situation
     space = sit.space

@@ -75,6 +75,21 @@ def check_normalised(model, *, atol: float = _STRICT_ATOL) -> bool:
     ------
     ValueError
         Naming the first node whose CPD is missing, non-finite, out of [0, 1] or not normalised.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.networks import SemanticGSLProblem, build_network_a, check_normalised
+    >>> model = build_network_a(SemanticGSLProblem.random(np.random.default_rng(0), 4, 3))
+    >>> check_normalised(model)
+    True
+    >>> cpd = model.get_cpds("S")
+    >>> cpd.values[0] += 1e-6                                  # a column no longer sums to 1
+    >>> try:
+    ...     check_normalised(model)
+    ... except ValueError as err:
+    ...     print(str(err).startswith("CPD of 'S' has a column summing to 1"))
+    True
     """
     for node in sorted(model.nodes()):
         cpd = model.get_cpds(node)

@@ -307,6 +307,23 @@ def exact_information_gain(model: DiscreteBayesianNetwork, problem: SemanticGSLP
     Returns
     -------
     information_gain : (len(cells),) ndarray
+
+    Raises
+    ------
+    TypeError
+        ``model`` and ``problem`` are not a network of this package and its problem.
+    ValueError
+        ``model`` is Network B (no joint over S), its likelihoods fall outside pgmpy's float64 range
+        (:func:`check_scale`), or ``cells`` are not indices of the problem's cells.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.networks import SemanticGSLProblem, build_network_a, exact_information_gain
+    >>> problem = SemanticGSLProblem.random(np.random.default_rng(0), 4, 3)
+    >>> gain = exact_information_gain(build_network_a(problem), problem, cells=[0, 1])
+    >>> gain.shape, bool((gain >= 0).all())
+    ((2,), True)
     """
     kind = _check_pair(model, problem)
     if kind != "A":

@@ -58,6 +58,13 @@ def build_network_a(problem: SemanticGSLProblem) -> DiscreteBayesianNetwork:
         Checked by pgmpy's ``check_model`` and by :func:`check_normalised`. State names: cell names for S,
         class names for O_c, gas names for γ.
 
+    Raises
+    ------
+    TypeError
+        ``problem`` is not a :class:`SemanticGSLProblem`.
+    ValueError
+        A CPD fails :func:`check_normalised` or pgmpy's ``check_model``.
+
     Examples
     --------
     >>> import numpy as np

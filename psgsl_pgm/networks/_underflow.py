@@ -41,6 +41,20 @@ def log_evidence(problem: SemanticGSLProblem, network: str) -> float:
     -------
     float
         Natural log of the probability pgmpy's elimination normalises by.
+
+    Raises
+    ------
+    ValueError
+        ``network`` is neither ``"A"`` nor ``"B"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.networks import SemanticGSLProblem, log_evidence
+    >>> problem = SemanticGSLProblem.random(np.random.default_rng(0), 4, 3)
+    >>> a, b = log_evidence(problem, "A"), log_evidence(problem, "B")
+    >>> bool(a <= 0.0 and b <= 0.0)                            # likelihoods scaled to at most 1: a probability
+    True
     """
     log_lam = np.zeros((problem.n, problem.k))  # Σ_j log p̃(z_cj | o), each observation scaled as in its CPD
     np.add.at(log_lam, problem.observation_cells, _log_scaled(problem.observation_likelihoods))

@@ -91,6 +91,12 @@ def vergassola_concentration(displacement, *, wind, diffusivity: float, lifetime
     c : (...) ndarray of float64
         exp(w·(r − r0)/(2D)) K0(‖r − r0‖/λ) / (2π D); +inf at zero displacement (logarithmic singularity).
 
+    Raises
+    ------
+    ValueError
+        ``diffusivity`` or ``lifetime`` is not a positive number, ``wind`` is not a finite (2,) vector, or
+        ``displacement`` is not of shape (..., 2).
+
     Examples
     --------
     >>> c = vergassola_concentration([[1.0, 0.0], [-1.0, 0.0]], wind=(0.5, 0.0), diffusivity=0.5, lifetime=10.0)
@@ -126,6 +132,20 @@ def vergassola_encounter_rate(
     Returns
     -------
     rate : (...) ndarray of float64
+
+    Raises
+    ------
+    ValueError
+        A parameter is not a positive number, ``sensor_radius`` is not smaller than the correlation length λ, or
+        ``wind`` or ``displacement`` is refused (see :func:`vergassola_concentration`).
+
+    Examples
+    --------
+    >>> from psgsl_pgm.olfaction import vergassola_encounter_rate
+    >>> rate = vergassola_encounter_rate([[1.0, 0.0], [-1.0, 0.0]], wind=(0.5, 0.0), diffusivity=0.5, lifetime=10.0,
+    ...                                  emission_rate=1.0, sensor_radius=0.05)
+    >>> rate.round(4)                                          # 1 m downwind and 1 m upwind, hits per second
+    array([0.3361, 0.1236])
     """
     lam = correlation_length(
         diffusivity=diffusivity, lifetime=lifetime, wind_speed=float(np.hypot(*_wind_vector(wind)))

@@ -51,6 +51,20 @@ def fit_encounter_scale(model: PlumeModel, positions, hits, source, *, false_hit
     ValueError
         If the likelihood has no finite maximiser: no hit where the model predicts gas (κ → 0), or no miss
         where it does (κ → ∞).
+
+    Examples
+    --------
+    The corridor of :func:`profile_log_likelihood`: readings near the source (at its west end, the wind blowing
+    east) hit, far ones miss:
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import PlumeModel, fit_encounter_scale
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> kappa = fit_encounter_scale(model, np.c_[x, np.full(x.size, 0.4)], x < 4.0, (0.4, 0.4), false_hit_rate=0.01)
+    >>> round(kappa, 4)
+    0.153
     """
     if not isinstance(model, PlumeModel):
         raise TypeError(f"model must be a PlumeModel, got {type(model).__name__}")
@@ -77,6 +91,13 @@ def encounter_scale_mle(predicted, hits, *, false_hit_rate: float = 0.0) -> floa
     hits : (n,) array_like of bool
     false_hit_rate : float, keyword-only
         ε ∈ [0, 1).
+
+    Raises
+    ------
+    ValueError
+        ``predicted`` is not (n,) finite and non-negative; ``hits`` is not (n,) bool; ``false_hit_rate`` is not in
+        [0, 1); or the likelihood has no finite positive maximiser (no hit, or no miss, where gas is predicted; false
+        hits alone explain the hits; no float64 scale fits).
 
     Examples
     --------
@@ -306,6 +327,12 @@ def fit_hit_model(predicted, hits, *, false_hit_rate: float = 0.0) -> tuple:
     (kappa, delta, log_likelihood) : tuple of float
         κ̂ (m²/s), δ̂ and the maximised Σ_k log P(g_k) (nats).
 
+    Raises
+    ------
+    ValueError
+        ``predicted`` is not (n,) finite and non-negative, ``hits`` is not (n,) bool, ``false_hit_rate`` is not
+        in [0, 1), or no finite κ fits with δ = 0 (see :func:`encounter_scale_mle`).
+
     Examples
     --------
     >>> import numpy as np
@@ -444,6 +471,30 @@ def fit_plume_parameters(runs, *, false_hit_rate: float = 0.0, diffusivities=(0.
     Returns
     -------
     PlumeFit
+
+    Raises
+    ------
+    TypeError
+        ``runs`` is empty or holds something other than :class:`CalibrationRun`, or ``fit_missed_hits`` is not a
+        bool.
+    ValueError
+        ``false_hit_rate`` is not in [0, 1), or the grids are empty or hold a value that is not positive.
+
+    Examples
+    --------
+    One calibration run in a corridor (the source at its west end, the wind blowing east), on a 2 x 2 grid of
+    (D, τ) without the Nelder–Mead refinement:
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import CalibrationRun, PlumeModel, fit_plume_parameters
+    >>> model = PlumeModel(np.zeros((3, 40), bool), resolution=0.25, wind=np.tile([0.2, 0.0], (3, 40, 1)),
+    ...                    diffusivity=0.01, lifetime=30.0)
+    >>> x = np.arange(0.6, 10.0, 0.5)
+    >>> run = CalibrationRun(model, (0.4, 0.4), np.c_[x, np.full(x.size, 0.4)], x < 4.0)
+    >>> fit = fit_plume_parameters([run], false_hit_rate=0.01, diffusivities=(0.01, 0.1), lifetimes=(10.0, 100.0),
+    ...                            refine=False)
+    >>> round(fit.diffusivity, 3), round(fit.lifetime, 1), round(fit.encounter_scale, 3)
+    (0.01, 10.0, 0.571)
     """
     runs = list(runs)
     if not runs or not all(isinstance(r, CalibrationRun) for r in runs):
@@ -552,6 +603,22 @@ def score_tempering(scores, log_priors, true_cells) -> float:
     Returns
     -------
     lam : float
+
+    Raises
+    ------
+    ValueError
+        A score and its log prior differ in shape, a true cell lies outside them or off the prior's support, or
+        ``scores`` is empty.
+
+    Examples
+    --------
+    Two calibration posteriors over three cells with the same score, their true sources in cells 2 and 1:
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.olfaction import score_tempering
+    >>> flat = np.log(np.full(3, 1 / 3))
+    >>> round(score_tempering([[0.0, 1.0, 2.0], [0.0, 1.0, 2.0]], [flat, flat], [2, 1]), 3)
+    0.834
     """
     from scipy.optimize import minimize_scalar
     from scipy.special import logsumexp
@@ -596,6 +663,11 @@ def ar1_tempering(residuals):
     Returns
     -------
     rho, beta : float
+
+    Raises
+    ------
+    ValueError
+        A residual sequence is not finite, or no sequence holds a pair of consecutive readings that vary.
 
     Examples
     --------
@@ -647,6 +719,12 @@ def mixture_weights(log_likelihoods, *, tempering: float = 1.0, tol: float = 1e-
     -------
     weights : (J,) ndarray of float64
         Sums to 1.
+
+    Raises
+    ------
+    ValueError
+        ``log_likelihoods`` is not (R, J) with R, J >= 1, holds NaN or +inf, or has a run that no component
+        explains (all -inf); ``tempering`` is not in (0, 1].
 
     Examples
     --------

@@ -210,6 +210,11 @@ def type_hash(msgtype: str) -> str:
     str
         ``"RIHS01_"`` and 64 hexadecimal digits.
 
+    Raises
+    ------
+    ValueError
+        ``msgtype`` is neither a ROS 2 type of :data:`DEFINITIONS` nor one of the lab's messages.
+
     Examples
     --------
     >>> type_hash("geometry_msgs/msg/PoseStamped")

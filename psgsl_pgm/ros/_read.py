@@ -387,6 +387,38 @@ def read_bag(path, *, topics=None, map_frame: str = "map", robot_frame: str = "b
     Returns
     -------
     BagData
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file or folder.
+    ValueError
+        ``path`` is not a readable ROS 2 bag; a topic of an unknown message type, or messages that cannot be
+        decoded or aligned (the message names the bag and the topic); a negative ``tolerance``; a ``topics`` entry
+        that is not a topic name.
+    TypeError
+        ``topics`` is not a dict.
+    ImportError
+        The ``ros`` extra (rosbags) is not installed.
+
+    Examples
+    --------
+    A round trip through :func:`write_bag`:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from psgsl_pgm import GridMap
+    >>> from psgsl_pgm.ros import Episode, read_bag, write_bag
+    >>> t = np.arange(4.0)                                      # s
+    >>> pose = np.stack([0.3 + 0.25 * t, np.full(4, 0.5), np.zeros(4)], axis=-1)   # x, y in m; yaw in rad
+    >>> episode = Episode(grid=GridMap(np.zeros((10, 20), bool), 0.1), pose_t=t, pose=pose, gas_t=t,
+    ...                   gas=[2.0, 0.5, 2.0, 0.5], wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[],
+    ...                   frame_cells=[], frame_labels=[])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     data = read_bag(write_bag(Path(folder) / "room.bag", episode))
+    >>> data.gas.tolist(), data.grid.shape
+    ([2.0, 0.5, 2.0, 0.5], (10, 20))
     """
     from ._types import require
 

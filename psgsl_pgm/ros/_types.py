@@ -99,7 +99,18 @@ _VISION_MSGS = {
 
 
 def require():
-    """Import rosbags; ImportError naming the ``ros`` extra when it is missing."""
+    """Import rosbags; ImportError naming the ``ros`` extra when it is missing.
+
+    Raises
+    ------
+    ImportError
+        rosbags is not installed; the message names the ``ros`` extra to install.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.ros import require
+    >>> require()                                               # silent when the ros extra is installed
+    """
     try:
         import rosbags.rosbag2
         import rosbags.typesys  # noqa: F401

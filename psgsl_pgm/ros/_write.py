@@ -72,6 +72,33 @@ def write_bag(path, episode: Episode, *, storage: str = "mcap") -> Path:
     Returns
     -------
     Path
+
+    Raises
+    ------
+    TypeError
+        ``episode`` is not an :class:`Episode`.
+    ValueError
+        ``storage`` is neither ``"mcap"`` nor ``"sqlite3"``.
+    ImportError
+        The ``ros`` extra (rosbags) is not installed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from psgsl_pgm import GridMap
+    >>> from psgsl_pgm.ros import Episode, bag_topics, write_bag
+    >>> t = np.arange(3.0)                                      # s
+    >>> episode = Episode(grid=GridMap(np.zeros((10, 20), bool), 0.1), pose_t=t, pose=np.zeros((3, 3)) + 0.5,
+    ...                   gas_t=t, gas=[0.0, 1.5, 3.0], wind_t=t, wind=np.zeros((3, 2)), frame_t=[], frame_cells=[],
+    ...                   frame_labels=[])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_bag(Path(folder) / "room.bag", episode, storage="sqlite3")
+    ...     print(path.name, sorted(p.suffix for p in path.iterdir()))
+    ...     print([(topic, n) for topic, _, n, role in bag_topics(path) if role == "gas"])
+    room.bag ['.db3', '.yaml']
+    [('/gas', 3)]
     """
     if not isinstance(episode, Episode):
         raise TypeError(f"episode must be a psgsl_pgm.ros.Episode, got {type(episode).__name__}")

@@ -240,6 +240,28 @@ def run_benchmark(*, out, houses: int = 0, seeds: int = 5, world=None, policies=
     -------
     dict
         The report's summary (:func:`psgsl_pgm.search._bench_report.write_report`).
+
+    Raises
+    ------
+    TypeError
+        ``config`` or ``search`` is of the wrong type, or ``gas_unknown`` is not a bool.
+    ValueError
+        An unknown policy, variant, condition or estimator; ``conditions`` without ``"right-ontology"``; no arm left
+        (semantics alone with ``olfaction`` only, a reactive policy without it); ``houses`` and ``world`` together,
+        or neither; bad ``house_options`` (naming the option); ``gases`` not of the ontology; a bad
+        ``sources_per_episode``; or ``out`` holds another configuration or is in use.
+
+    Examples
+    --------
+    Even one episode of one arm takes about a second (the world's houses are prepared and the report written), so
+    the benchmark is run in ``docs/guide/benchmark.md``. Its settings are checked before anything is written:
+
+    >>> from psgsl_pgm.search import run_benchmark
+    >>> try:
+    ...     run_benchmark(out="never-created", houses=1, conditions=("no-rooms",))
+    ... except ValueError as err:
+    ...     print(str(err).startswith("conditions must include 'right-ontology'"))
+    True
     """
     from ..runs._runner import GridJob, grid_folder, run_grid
     from ..sim._generated_ontology import GENERATOR_REFERENCE_SEEDS

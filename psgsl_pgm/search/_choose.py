@@ -58,6 +58,19 @@ def choose(policy: str, sit: Situation) -> Decision:
 
     :math:`H_b` the binary entropy (both gains in nats) and :math:`\bar P_p` the predicted probability of a hit at p
     given that the stop does not find the source.
+
+    Examples
+    --------
+    The situation of a closed-loop episode after its first stop (the loop asks the same at every stop):
+
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import choose
+    >>> from psgsl_pgm.search._stepper import ClosedLoopEpisode
+    >>> episode = ClosedLoopEpisode("oven", 0, None, "semantics+rooms", config=ExperimentConfig(warm_up=5.0))
+    >>> episode.take(episode.first_move())
+    >>> decision = choose("nearest-object", episode.situation())
+    >>> decision.drive > 0, len(decision.headings)             # metres to the next stop, camera headings there
+    (True, 1)
     """
     if policy == "greedy":
         return _towards(sit, int(np.argmax(sit.posterior)))  # the MAP cell

@@ -37,6 +37,18 @@ def run_search_demo(out, *, seeds=DEMO_SEARCH_SEEDS, budget: float = DEMO_BUDGET
     ------
     ValueError
         As :func:`run_search_grid` (e.g. no seed, or ``out`` holds runs of another configuration).
+
+    Examples
+    --------
+    Its default (three seeds, 300 s each, two arms) takes minutes, and even one seed with a 20-s budget takes
+    several seconds; ``psgsl demo`` ends with it (``docs/guide/closed-loop.md``). The summary it returns has the form
+    of the stored closed-loop grid's, which ships with the package:
+
+    >>> from psgsl_pgm.teaching import closed_loop_results
+    >>> summary, _ = closed_loop_results(source="oven")
+    >>> arm = summary["oven/infotaxis"]["infotaxis/semantics+rooms"]
+    >>> sorted(k for k in arm if k in ("n_runs", "rmst", "success_rate"))
+    ['n_runs', 'rmst', 'success_rate']
     """
     top = run_search_grid(["oven"], ["infotaxis"], ["olfaction", "semantics+rooms"], ["infotaxis"], seeds,
                           out=Path(out), workers=workers, search=SearchConfig(time_budget=float(budget)),

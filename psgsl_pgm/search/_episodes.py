@@ -77,6 +77,19 @@ def robot_ontology(ontology: Ontology, condition: str, *, house: int) -> Ontolog
         ``condition`` is not a string.
     ValueError
         ``condition`` is not one of :data:`CONDITIONS`.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.experiment import house_ontology
+    >>> from psgsl_pgm.search import robot_ontology
+    >>> ontology = house_ontology()
+    >>> robot_ontology(ontology, "right-ontology", house=0) is ontology
+    True
+    >>> robot_ontology(ontology, "no-rooms", house=0).rooms
+    ()
+    >>> wrong = robot_ontology(ontology, "wrong-ontology", house=0)
+    >>> bool(wrong.source_likelihood("smoke")[0] != ontology.source_likelihood("smoke")[0])   # the oven's moved
+    True
     """
     check_condition(condition)
     if condition == "right-ontology":
@@ -138,6 +151,26 @@ def draw_episode(world, house: int, seed: int, *, gases, off_rate: float, source
     dict
         ``{"gas", "kind": "object" | "off-ontology", "class", "object", "xy": [x, y]}`` (class and object None
         for an off-ontology source).
+
+    Raises
+    ------
+    ValueError
+        An off-ontology source is drawn (or no object class can hold the gas) and no floor cell can hold a
+        findable source.
+
+    Examples
+    --------
+    The sources the episode may draw from are the world's findable ones (``findable_sources``):
+
+    >>> from psgsl_pgm.search import draw_episode
+    >>> from psgsl_pgm.search._episodes import findable_sources
+    >>> from psgsl_pgm.sim import default_world
+    >>> world = default_world()
+    >>> episode = draw_episode(world, 0, 0, gases=("smoke",), off_rate=0.0, sources=findable_sources(world))
+    >>> episode["gas"], episode["kind"], episode["class"]
+    ('smoke', 'object', 'toaster')
+    >>> draw_episode(world, 0, 0, gases=("smoke",), off_rate=0.0, sources=findable_sources(world)) == episode
+    True
     """
     from ..io._coco import canonical_class
     from ..sim._worldfile import _true_class

@@ -27,6 +27,18 @@ def plot_survival(groups: dict, *, title: str = ""):
     -------
     matplotlib.figure.Figure
         The figure (needs the ``matplotlib`` extra).
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, plot_survival, run_closed_loop
+    >>> run = run_closed_loop("oven", 0, "greedy", "olfaction", config=ExperimentConfig(warm_up=5.0),
+    ...                       search=SearchConfig(time_budget=20.0))
+    >>> fig = plot_survival({"greedy/olfaction": [run]})
+    >>> fig.axes[0].get_xlabel()
+    'simulated time since the start, t [s]'
+    >>> plt.close(fig)
     """
     import matplotlib.pyplot as plt
 
@@ -82,6 +94,19 @@ def plot_paths(runs: dict, house, *, title: str = "", floor: float = 1e-6):
     -------
     matplotlib.figure.Figure
         The figure (needs the ``matplotlib`` extra).
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, plot_paths, run_closed_loop
+    >>> from psgsl_pgm.sim import default_house
+    >>> run = run_closed_loop("oven", 0, "greedy", "olfaction", config=ExperimentConfig(warm_up=5.0),
+    ...                       search=SearchConfig(time_budget=20.0))
+    >>> fig = plot_paths({"greedy/olfaction": run}, default_house(0))
+    >>> fig.axes[0].get_title().splitlines()[0], fig.axes[0].get_xlabel()
+    ('greedy/olfaction', 'x [m]')
+    >>> plt.close(fig)
     """
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm

@@ -42,6 +42,20 @@ def findability(world, seed: int = 0, *, found_radius: float | None = None, clea
         cell to what counts as found, "geodesic": m from the start to the nearest drivable cell within
         found_radius (inf: none is reachable), "findable": bool, "at_start": m from the start to what counts as
         found when that is within found_radius (the robot finds the source where it starts), else None}``.
+
+    Raises
+    ------
+    ValueError
+        ``found_radius`` or ``clearance`` is not a positive number, no cell of the map is drivable, or a source
+        names no object or position of the world.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.search import findability
+    >>> from psgsl_pgm.sim import default_world
+    >>> f = findability(default_world())
+    >>> sorted(f), f["oven"]["findable"], round(f["oven"]["gap"], 2)    # gap: m from the nearest drivable cell
+    (['bed', 'hallway', 'oven'], True, 0.3)
     """
     from scipy import ndimage as ndi
 
@@ -114,6 +128,18 @@ def check_findable(world, seed: int = 0, *, found_radius: float | None = None, c
         A source is found at the start (within ``found_radius`` of it), or can never be found (no drivable cell
         within ``found_radius`` of it, or none connected to the start); no cell of the map is drivable; or
         ``found_radius`` or ``clearance`` is not positive (:func:`findability`).
+
+    Examples
+    --------
+    >>> from psgsl_pgm.search import check_findable
+    >>> from psgsl_pgm.sim import default_world
+    >>> check_findable(default_world())["oven"]["findable"]
+    True
+    >>> try:
+    ...     check_findable(default_world(), found_radius=0.1)     # the oven stands 0.3 m from the nearest drivable cell
+    ... except ValueError as err:
+    ...     print("can never be found" in str(err))
+    True
     """
     from ._settings import SearchConfig
 

@@ -109,6 +109,18 @@ def summarize_runs(runs) -> dict:
     ------
     ValueError
         The runs do not share one time budget, or there is no run.
+
+    Examples
+    --------
+    One short run (a 20-s budget):
+
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, run_closed_loop, summarize_runs
+    >>> run = run_closed_loop("oven", 0, "greedy", "olfaction", config=ExperimentConfig(warm_up=5.0),
+    ...                       search=SearchConfig(time_budget=20.0))
+    >>> s = summarize_runs([run])
+    >>> s["n_runs"], s["success_rate"]["value"], s["rmst"]["tau"]     # not found in 20 s: RMST is the budget
+    (1, 0.0, 20.0)
     """
     runs = list(runs)
     found = np.array([r.succeeded for r in runs])
@@ -277,6 +289,24 @@ def write_search_outputs(out, *, figures: bool = True, world=None) -> dict:
     ValueError
         ``out/runs`` holds no run, a file there is not a search run, or the runs of one table do not share one
         time budget.
+
+    Examples
+    --------
+    Aggregating a folder that holds one run (made by :func:`run_search_grid`):
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, run_search_grid, write_search_outputs
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     _ = run_search_grid(["oven"], ["greedy"], ["olfaction"], ["infotaxis"], [0], out=out, workers=1,
+    ...                         config=ExperimentConfig(warm_up=5.0), search=SearchConfig(time_budget=20.0),
+    ...                         progress=False, figures=False)
+    ...     top = write_search_outputs(out, figures=False)
+    ...     print(sorted(p.name for p in (Path(out) / "oven-infotaxis").iterdir()))
+    ['runs.csv', 'summary.json']
+    >>> top["oven/infotaxis"]["greedy/olfaction"]["success_rate"]["value"]
+    0.0
     """
     out = Path(out)
     files = sorted((out / "runs").glob("*.npz"))
@@ -419,6 +449,20 @@ def run_search_grid(sources=("oven",), policies=("tour", "infotaxis"), variants=
         runs of another configuration or is in use by another process.
     psgsl_pgm.runs._runner.GridInterrupted
         On Ctrl-C, with every finished run on disk.
+
+    Examples
+    --------
+    One run (one source, policy, variant, estimator and seed; a 20-s budget) in a temporary folder:
+
+    >>> import tempfile
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, run_search_grid
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     top = run_search_grid(["oven"], ["greedy"], ["olfaction"], ["infotaxis"], [0], out=out, workers=1,
+    ...                           config=ExperimentConfig(warm_up=5.0), search=SearchConfig(time_budget=20.0),
+    ...                           progress=False, figures=False)
+    >>> list(top), list(top["oven/infotaxis"]), top["oven/infotaxis"]["greedy/olfaction"]["n_runs"]
+    (['oven/infotaxis'], ['greedy/olfaction'], 1)
     """
     config = ExperimentConfig() if config is None else config
     search = SearchConfig() if search is None else search

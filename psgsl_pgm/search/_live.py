@@ -355,6 +355,50 @@ def run_live(endpoint, session: LiveSession, *, roles: dict, subs: dict, duratio
         ``skipped_detections`` (of classes the detector does not know), ``late_detections`` (arrays that came
         after their step was taken: dropped), ``pending`` (gas readings received but not assimilated: no pose or
         wind after them).
+
+    Raises
+    ------
+    ValueError
+        No end is given (``duration``, ``until_declared`` or ``stop``), ``duration`` is not a positive number, or
+        a message cannot be decoded (see :func:`psgsl_pgm.ros.read_bag`).
+
+    Examples
+    --------
+    A 4-reading episode in the default house's hallway, written as a bag and handed to the node one message per
+    poll by a stand-in for the DDS endpoint (``psgsl live`` uses :class:`psgsl_pgm.ros._dds.DdsEndpoint`):
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from rosbags.rosbag2 import Reader
+    >>> from psgsl_pgm.ros import Episode, write_bag
+    >>> from psgsl_pgm.ros._dds import message_types
+    >>> from psgsl_pgm.search import LiveSession, run_live
+    >>> from psgsl_pgm.sim import default_house
+    >>> class Feed:                                            # take() what came in, publish() what the node sends
+    ...     def __init__(self, messages):
+    ...         self.messages, self.published = list(messages), []
+    ...     def take(self):
+    ...         return [self.messages.pop(0)] if self.messages else []
+    ...     def publish(self, topic, message):
+    ...         self.published.append(topic)
+    >>> t = np.arange(4.0)                                     # s
+    >>> pose = np.stack([1.0 + 0.5 * t, np.full(4, 6.0), np.zeros(4)], axis=-1)
+    >>> episode = Episode(grid=default_house(0).grid, pose_t=t, pose=pose, gas_t=t, gas=[2.0, 0.5, 2.0, 0.5],
+    ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[])
+    >>> roles = {"pose": "/tf", "gas": "/gas", "wind": "/wind", "detections": "/detections"}
+    >>> subs = {"/tf": "tf2_msgs/msg/TFMessage", "/gas": "olfaction_msgs/msg/GasSensor",
+    ...         "/wind": "geometry_msgs/msg/Vector3Stamped", "/detections": "vision_msgs/msg/Detection3DArray"}
+    >>> T = message_types()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     with Reader(write_bag(Path(folder) / "hall.bag", episode)) as bag:
+    ...         messages = [(c.topic, s, T[c.msgtype].deserialize(raw)) for c, s, raw in bag.messages()
+    ...                     if c.topic in subs]
+    >>> feed = Feed(messages)
+    >>> result = run_live(feed, LiveSession(policy="greedy", variant="olfaction"), roles=roles, subs=subs,
+    ...                   latency=0.0, poll=0.0, stop=lambda: not feed.messages)
+    >>> len(result["steps"]), feed.published[:2]               # a goal and a posterior per gas reading
+    (4, ['/goal_pose', '/psgsl/posterior'])
     """
     from ..ros._dds import pose_stamped, posterior_grid
 
@@ -434,6 +478,45 @@ def write_live(result: dict, session: LiveSession, out, *, subs: dict, goal_topi
     -------
     list of Path
         The files written.
+
+    Examples
+    --------
+    The run of :func:`run_live`'s example, recorded:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from rosbags.rosbag2 import Reader
+    >>> from psgsl_pgm.ros import Episode, write_bag
+    >>> from psgsl_pgm.ros._dds import message_types
+    >>> from psgsl_pgm.search import LiveSession, run_live, write_live
+    >>> from psgsl_pgm.sim import default_house
+    >>> class Feed:
+    ...     def __init__(self, messages):
+    ...         self.messages = list(messages)
+    ...     def take(self):
+    ...         return [self.messages.pop(0)] if self.messages else []
+    ...     def publish(self, topic, message):
+    ...         pass
+    >>> t = np.arange(4.0)
+    >>> pose = np.stack([1.0 + 0.5 * t, np.full(4, 6.0), np.zeros(4)], axis=-1)
+    >>> episode = Episode(grid=default_house(0).grid, pose_t=t, pose=pose, gas_t=t, gas=[2.0, 0.5, 2.0, 0.5],
+    ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[])
+    >>> roles = {"pose": "/tf", "gas": "/gas", "wind": "/wind", "detections": "/detections"}
+    >>> subs = {"/tf": "tf2_msgs/msg/TFMessage", "/gas": "olfaction_msgs/msg/GasSensor",
+    ...         "/wind": "geometry_msgs/msg/Vector3Stamped", "/detections": "vision_msgs/msg/Detection3DArray"}
+    >>> T = message_types()
+    >>> session = LiveSession(policy="greedy", variant="olfaction")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     with Reader(write_bag(Path(folder) / "hall.bag", episode)) as bag:
+    ...         feed = Feed([(c.topic, s, T[c.msgtype].deserialize(raw)) for c, s, raw in bag.messages()
+    ...                      if c.topic in subs])
+    ...     result = run_live(feed, session, roles=roles, subs=subs, latency=0.0, poll=0.0,
+    ...                       stop=lambda: not feed.messages)
+    ...     files = write_live(result, session, Path(folder) / "live", subs=subs)
+    ...     lines = (Path(folder) / "live" / "steps.csv").read_text().splitlines()
+    >>> [f.name for f in files][:2], len(lines)                # a header and one line per step
+    (['live.bag', 'steps.csv'], 5)
     """
     from ..io._output import write_file_atomically
     from ..ros._dds import message_types, pose_stamped, posterior_grid

@@ -122,10 +122,13 @@ def run_closed_loop(source="oven", seed: int = 0, policy: str = "infotaxis", var
 
     Examples
     --------
+    With 5 s of gas before the robot starts (the default is a minute):
+
+    >>> from psgsl_pgm.experiment import ExperimentConfig
     >>> from psgsl_pgm.search import SearchConfig, run_closed_loop
-    >>> run = run_closed_loop("oven", 0, "nearest-object", "semantics+rooms",
-    ...                       search=SearchConfig(time_budget=120.0))  # doctest: +SKIP
-    >>> run.declared, run.declared_correct  # doctest: +SKIP
+    >>> run = run_closed_loop("oven", 0, "nearest-object", "semantics+rooms", config=ExperimentConfig(warm_up=5.0),
+    ...                       search=SearchConfig(time_budget=120.0))
+    >>> run.declared, run.declared_correct
     (True, True)
     """
 

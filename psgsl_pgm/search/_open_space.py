@@ -336,6 +336,23 @@ def open_space_benchmark(policy: str, *, lambda_over_dx: float, r_dt: float, epi
         ``mean_steps`` (mean T over the episodes that found the source), ``sem`` (its standard error),
         ``median``, ``p_not_found`` (fraction of episodes stopped at ``max_steps``), ``steps`` ((episodes,)
         int array, T of each episode; ``max_steps`` where not found), ``n`` (grid size), ``episodes``.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``policy``, ``episodes`` or ``max_steps`` below 1, or parameters :class:`OpenSpaceSearch`
+        refuses.
+    TypeError
+        ``episodes`` or ``seed`` is not an integer.
+
+    Examples
+    --------
+    Three episodes on an 11 x 11 grid:
+
+    >>> from psgsl_pgm.search import open_space_benchmark
+    >>> r = open_space_benchmark("greedy", lambda_over_dx=5.0, r_dt=1.0, episodes=3, seed=0, n=11)
+    >>> r["steps"].tolist(), r["mean_steps"], r["p_not_found"]
+    ([6, 22, 33], 20.333333333333332, 0.0)
     """
     if policy not in OPEN_SPACE_POLICIES:
         raise ValueError(f"policy must be one of {OPEN_SPACE_POLICIES}, got {policy!r}")

@@ -66,6 +66,11 @@ def more_sources_probability(prior, k: int, escape: float) -> float:
     -------
     float
 
+    Raises
+    ------
+    ValueError
+        ``prior`` is not of shape (3,), ``k`` is not an integer >= 1, or ``escape`` is not in [0, 1].
+
     Examples
     --------
     >>> round(more_sources_probability([1/3, 1/3, 1/3], 1, 1.0), 4)   # nothing searched: the prior's 2/3

@@ -60,6 +60,21 @@ def save_search_run(run: SearchRun, path) -> Path:
     -------
     pathlib.Path
         The path written.
+
+    Examples
+    --------
+    A round trip through :func:`load_search_run`:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, load_search_run, run_closed_loop, save_search_run
+    >>> run = run_closed_loop("oven", 0, "greedy", "olfaction", config=ExperimentConfig(warm_up=5.0),
+    ...                       search=SearchConfig(time_budget=20.0))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = load_search_run(save_search_run(run, Path(folder) / "run.npz"))
+    >>> back.policy, back.variant, back.time_to_find == run.time_to_find
+    ('greedy', 'olfaction', True)
     """
 
     return atomic_write(path, write_search_run, run)
@@ -83,6 +98,27 @@ def load_search_run(path) -> SearchRun:
     ------
     ValueError
         The file cannot be read, or is not a search run file (a field is missing or of the wrong kind).
+
+    Examples
+    --------
+    A round trip through :func:`save_search_run`:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.experiment import ExperimentConfig
+    >>> from psgsl_pgm.search import SearchConfig, load_search_run, run_closed_loop, save_search_run
+    >>> run = run_closed_loop("oven", 0, "greedy", "olfaction", config=ExperimentConfig(warm_up=5.0),
+    ...                       search=SearchConfig(time_budget=20.0))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = load_search_run(save_search_run(run, Path(folder) / "run.npz"))
+    ...     _ = (Path(folder) / "notes.npz").write_text("not a run")
+    ...     try:
+    ...         load_search_run(Path(folder) / "notes.npz")
+    ...     except ValueError as err:
+    ...         print("is not a search run file" in str(err))
+    True
+    >>> back.source, back.seed, bool((back.path == run.path).all())
+    ('oven', 0, True)
     """
     path = Path(path)
     try:

@@ -78,6 +78,12 @@ def kaplan_meier(times, found, *, level: float = 0.95) -> dict:
         (events and censorings), as ``lifelines.KaplanMeierFitter.survival_function_`` does. The band at t is
         S^exp(∓z σ/ln S) with σ² = Σ_{u ≤ t} d/(n(n − d)) (Greenwood); [1, 1] where S = 1 and [0, 0] where S = 0.
 
+    Raises
+    ------
+    ValueError
+        ``times`` is not a non-empty 1-D array of finite times >= 0, ``found`` is not a bool array of its shape, or
+        ``level`` is not in (0, 1).
+
     Examples
     --------
     >>> km = kaplan_meier([10.0, 20.0, 20.0, 30.0], [True, True, False, False])
@@ -126,6 +132,12 @@ def rmst(times, found, tau, *, level: float = 0.95) -> dict:
         Var = Σ_{events u < τ} A(u)² d/(n(n − d)) with A(u) = ∫_u^τ S(t) dt (terms with n = d have A = 0); the
         interval value ± z·se is intersected with [0, τ], where RMST(τ) lies (this keeps its coverage). With no
         event before τ the variance is 0 and the interval a point: read it beside the success rate.
+
+    Raises
+    ------
+    ValueError
+        ``times`` or ``found`` as for :func:`kaplan_meier`, ``tau`` is not a positive number, or ``level`` is not in
+        (0, 1).
 
     Examples
     --------
@@ -288,6 +300,21 @@ def paired_comparison(times_a, times_b, tau, *, level: float = 0.95, n_resamples
         ``{"value", "ci95", "p_value", "n", "test", "interval"}``: value = mean(min(T_a, τ) − min(T_b, τ)) =
         RMST_a(τ) − RMST_b(τ) (negative: a finds the source sooner), its percentile bootstrap interval over seeds,
         and the sign-flip p-value (:func:`sign_flip_pvalue`).
+
+    Raises
+    ------
+    ValueError
+        ``tau`` is not a positive number, the times are not paired (same non-empty length), or a time lies
+        outside [0, ``tau``].
+
+    Examples
+    --------
+    Three seeds, a 120-s budget (120: not found); condition a finds the source sooner on two of them:
+
+    >>> from psgsl_pgm.search import paired_comparison
+    >>> r = paired_comparison([10.0, 50.0, 120.0], [30.0, 80.0, 120.0], 120.0, n_resamples=500)
+    >>> round(r["value"], 2), r["p_value"], r["n"]
+    (-16.67, 0.5, 3)
     """
     tau = positive(tau, "tau", "seconds")
     a = as_float_array(times_a, "times_a", dtype=np.float64, ndim=1)
@@ -358,6 +385,15 @@ def nested_bootstrap(values, groups, statistic=None, *, level: float = 0.95, n_r
         ``{"value", "ci95", "n", "groups", "interval"}``: the statistic of the data, the (1 ± level)/2 quantiles
         of its resampled values, the numbers of runs and groups, and how the interval was made. A statistic that
         is not finite on some resample (a ratio over zero) is left out of the quantiles; all of them: NaN bounds.
+
+    Raises
+    ------
+    ValueError
+        ``values`` is not a non-empty (n,) or (arms, n) array of finite numbers, ``groups`` does not give one group
+        per run, ``level`` is not in (0, 1), ``n_resamples`` is below 1, or several arms come without
+        ``statistic``.
+    TypeError
+        ``statistic`` is not callable, or ``n_resamples`` or ``seed`` is not an integer.
 
     Examples
     --------

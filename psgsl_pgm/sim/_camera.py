@@ -307,6 +307,24 @@ def take_frame(house, pose, *, camera: Camera, detector: DetectorModel, rng, mod
     Returns
     -------
     Frame
+
+    Raises
+    ------
+    ValueError
+        ``model`` has other classes than ``detector``; a detector with persistence or distractors is given no
+        ``errors``; ``errors`` were drawn for another number of objects.
+    TypeError
+        ``errors`` is not a :class:`DetectorErrors`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.sim import Camera, DetectorModel, default_house, take_frame
+    >>> house = default_house(seed=0)
+    >>> frame = take_frame(house, (7.5, 3.0, -1.5), camera=Camera(), detector=DetectorModel.default(house.classes),
+    ...                    rng=np.random.default_rng(0))
+    >>> frame.cells.shape[1], frame.likelihood.shape[1] == len(house.classes)   # (row, col) and p(z | o) per cell
+    (2, True)
     """
     model = detector if model is None else model
     if model.classes != detector.classes:

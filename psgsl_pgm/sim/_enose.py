@@ -87,6 +87,13 @@ def draw_gas(gases, seed: int) -> str:
     -------
     str
 
+    Raises
+    ------
+    TypeError
+        ``gases`` is not a sequence of names (e.g. one str), or ``seed`` is not an integer.
+    ValueError
+        ``gases`` is empty or repeats a name.
+
     Examples
     --------
     >>> draw_gas(("smoke", "ethanol"), 0) in ("smoke", "ethanol")

@@ -338,6 +338,11 @@ def default_house(seed: int = 0) -> House:
     -------
     House
 
+    Raises
+    ------
+    TypeError
+        ``seed`` is not an integer.
+
     Examples
     --------
     >>> h = default_house(seed=0)

@@ -65,6 +65,11 @@ def house_ontology(*, reference_seeds=REFERENCE_SEEDS, pseudo_count: float = 1.0
     Ontology
         Classes in the order of :data:`psgsl_pgm.sim.HOUSE_CLASSES`, rooms of :data:`psgsl_pgm.sim.HOUSE_ROOMS`.
 
+    Raises
+    ------
+    ValueError
+        ``reference_seeds`` is empty, or ``pseudo_count`` is not positive.
+
     Examples
     --------
     >>> ont = house_ontology()

@@ -340,6 +340,19 @@ def cfd_wind(house, *, speed: float = 0.2, duration: float = 600.0, seed: int = 
         lbmpy is not installed (the ``cfd`` extra), or there is no C compiler (gcc) to build its kernels.
     ValueError
         Bad arguments, a window that no air can pass, or a flow that diverged.
+
+    Examples
+    --------
+    A solve derives and compiles the lattice kernels (5-8 s) and then runs 8-18 s per house on one core, too long
+    for an example here; ``docs/guide/world-models.md`` shows how a world uses it (the ``cfd-wind`` component,
+    ``model: realistic``). The arguments are checked before anything is solved:
+
+    >>> from psgsl_pgm.sim import cfd_wind, default_house
+    >>> try:
+    ...     cfd_wind(default_house(seed=0), speed=-0.2)
+    ... except ValueError as err:
+    ...     print(err)
+    speed must be a positive finite number in m/s, got -0.2
     """
     if not isinstance(house, House):
         raise TypeError(f"house must be a House, got {type(house).__name__}")

@@ -151,7 +151,7 @@ def _unit(read, where, field, value, unit, **kw):
 
 
 def load_objects(yaml_path, *, like: GridMap | None = None, classes=None) -> list[SceneObject]:
-    """Load an object list (see the module docstring for the layout).
+    r"""Load an object list (see the module docstring for the layout).
 
     Parameters
     ----------
@@ -174,6 +174,18 @@ def load_objects(yaml_path, *, like: GridMap | None = None, classes=None) -> lis
         ``like`` is not a GridMap, ``classes`` is not a list of names.
     ValueError
         Unknown keys, non-numeric values, unknown classes, objects outside the map — naming the file and field.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import load_objects
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     path = Path(d) / "objects.yaml"
+    ...     _ = path.write_text("objects:\n  - {class: oven, position: [1.0, 2.0], size: [0.6, 0.6]}\n")
+    ...     objects = load_objects(path)
+    >>> objects[0].class_name, objects[0].center.round(2).tolist()
+    ('oven', [1.0, 2.0])
     """
     if like is not None and not isinstance(like, GridMap):
         raise TypeError(f"like must be a GridMap (or None), got {type(like).__name__} {like!r}")

@@ -319,6 +319,15 @@ def plot_house(house, *, ax=None, wind=None, concentration=None, source=None, ro
     Returns
     -------
     matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> from psgsl_pgm.sim import default_house, plot_house
+    >>> ax = plot_house(default_house(seed=0), labels=False)
+    >>> ax.get_xlabel(), ax.get_ylabel()
+    ('x [m]', 'y [m]')
+    >>> plt.close(ax.figure)
     """
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap

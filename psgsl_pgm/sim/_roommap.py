@@ -58,6 +58,21 @@ def load_room_map(yaml_path, *, like: GridMap) -> tuple[np.ndarray, list[str]]:
     ValueError
         Unknown/missing keys, an image of the wrong size, overlapping masks, grey levels missing from the
         table, non-numeric levels — naming the file and the field.
+
+    Examples
+    --------
+    A round trip through :func:`save_room_map`:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import GridMap, load_room_map, save_room_map
+    >>> labels = np.array([[0, 0, 1], [-1, 1, 1]])
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     path = save_room_map(labels, ["kitchen", "hall"], Path(d) / "rooms.yaml")
+    ...     back, names = load_room_map(path, like=GridMap(np.zeros((2, 3), bool), 0.1))
+    >>> bool(np.array_equal(back, labels)), names
+    (True, ['kitchen', 'hall'])
     """
     if not isinstance(like, GridMap):
         raise TypeError(f"like must be the GridMap whose frame the room images share, got {type(like).__name__}")
@@ -167,6 +182,23 @@ def save_room_map(room_labels, room_names, yaml_path) -> Path:
     -------
     Path
         The YAML path.
+
+    Raises
+    ------
+    ValueError
+        ``room_labels`` is not a 2-D integer array, holds an index outside ``[-1, len(room_names) - 1]``, or
+        ``room_names`` repeats a name.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import save_room_map
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     path = save_room_map(np.array([[0, 1]]), ["kitchen", "hall"], Path(d) / "rooms.yaml")
+    ...     print(sorted(p.name for p in Path(d).iterdir()))
+    ['rooms.yaml', 'rooms_0_kitchen.png', 'rooms_1_hall.png']
     """
     from PIL import Image
 

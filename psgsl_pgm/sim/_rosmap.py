@@ -46,6 +46,20 @@ def load_ros_map(yaml_path, *, unknown: str = "occupied") -> GridMap:
     ValueError
         Unknown or missing keys, non-numeric values, thresholds out of order, a rotated origin (yaw != 0),
         an unreadable image — the message names the file and the field.
+
+    Examples
+    --------
+    A round trip through :func:`save_ros_map`:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import GridMap, load_ros_map, save_ros_map
+    >>> occ = np.zeros((3, 4), bool); occ[0, :] = True          # a wall along the lowest row
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     back = load_ros_map(save_ros_map(GridMap(occ, 0.05, (1.0, 2.0)), Path(d) / "map.yaml"))
+    >>> bool(np.array_equal(back.occupancy, occ)), back.resolution, back.origin
+    (True, 0.05, (1.0, 2.0))
     """
     if unknown not in ("occupied", "free"):
         raise ValueError(f"unknown must be 'occupied' or 'free', got {unknown!r}")
@@ -102,6 +116,22 @@ def save_ros_map(grid: GridMap, yaml_path, *, image: str | None = None) -> Path:
     -------
     Path
         The YAML path.
+
+    Raises
+    ------
+    TypeError
+        ``grid`` is not a :class:`GridMap`.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import GridMap, save_ros_map
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     yaml_path = save_ros_map(GridMap(np.zeros((3, 4), bool), 0.05), Path(d) / "map.yaml")
+    ...     print(sorted(p.name for p in Path(d).iterdir()))
+    ['map.pgm', 'map.yaml']
     """
     from PIL import Image
 

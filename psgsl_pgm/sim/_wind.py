@@ -145,6 +145,19 @@ def potential_flow(grid: GridMap, inlet, outlet, *, mean_speed: float = 0.2) -> 
     ------
     ValueError
         Empty or overlapping windows, or no free path from an inlet to an outlet.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from psgsl_pgm.sim import GridMap, potential_flow
+    >>> grid = GridMap(np.zeros((4, 6), bool), 0.5)
+    >>> inlet = np.zeros((4, 6), bool); inlet[:, 0] = True
+    >>> outlet = np.zeros((4, 6), bool); outlet[:, -1] = True
+    >>> wind = potential_flow(grid, inlet, outlet, mean_speed=0.2)
+    >>> wind.velocity[1, 1:5, 0].round(3).tolist()                  # straight from the inlet to the outlet
+    [0.2, 0.2, 0.2, 0.2]
+    >>> bool(np.abs(wind.velocity[..., 1]).max() < 1e-12)           # and no sideways component
+    True
     """
     inlet = _check_mask(inlet, grid, "inlet")
     outlet = _check_mask(outlet, grid, "outlet")
@@ -310,6 +323,28 @@ def make_wind(
     Returns
     -------
     WindSequence
+
+    Raises
+    ------
+    ValueError
+        ``period``, ``duration``, ``correlation_length`` or ``correlation_time`` is not a positive number,
+        ``perturbation`` is negative or not finite, or :func:`potential_flow` refuses the windows or ``mean_speed``.
+
+    Examples
+    --------
+    A 2 m x 3 m room with an inlet window along its west column and an outlet along its east column:
+
+    >>> import numpy as np
+    >>> from psgsl_pgm.sim import GridMap, make_wind
+    >>> grid = GridMap(np.zeros((4, 6), bool), 0.5)
+    >>> inlet = np.zeros((4, 6), bool); inlet[:, 0] = True
+    >>> outlet = np.zeros((4, 6), bool); outlet[:, -1] = True
+    >>> wind = make_wind(grid, inlet, outlet, period=10.0, duration=30.0, seed=0)
+    >>> len(wind.snapshots), wind.period
+    (3, 10.0)
+    >>> steady = make_wind(grid, inlet, outlet, perturbation=0.0, duration=30.0)
+    >>> steady.snapshots[0] is steady.snapshots[2]                  # no eddies: one potential flow
+    True
     """
     for name, v in (("period", period), ("duration", duration), ("correlation_length", correlation_length),
                     ("correlation_time", correlation_time)):

@@ -524,6 +524,15 @@ def make_world(house: House | None = None, *, source="oven", seed: int = 0, mean
     -------
     World
 
+    Raises
+    ------
+    TypeError
+        ``house``, ``localisation`` or ``gas_sensor`` is of the wrong type.
+    ValueError
+        ``warm_up`` is negative or not finite; ``wind`` is not a :class:`WindSequence` on the house's grid;
+        ``source`` names no object of the house or lies outside it; more than 2 ``extra_sources``; ``gas_type``
+        without ``enose`` (or the reverse); or a component refuses its own arguments (the message names it).
+
     Examples
     --------
     >>> w = make_world(seed=0, warm_up=5.0)

@@ -348,7 +348,17 @@ def _true_class(o: SceneObject) -> str:
 
 def default_world() -> WorldSpec:
     """The embedded house as a world (``psgsl_pgm/data/worlds/house.yaml``); read once per process and file
-    content (a WorldSpec is immutable), so the runs of a grid share it."""
+    content (a WorldSpec is immutable), so the runs of a grid share it.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.sim import default_world
+    >>> spec = default_world()
+    >>> spec.path.name, spec.gas, sorted(spec.sources)
+    ('house.yaml', 'smoke', ['bed', 'hallway', 'oven'])
+    >>> default_world() is spec                               # read once per process
+    True
+    """
     with resources.as_file(resources.files("psgsl_pgm") / "data" / "worlds" / "house.yaml") as path:
         return _DEFAULT_WORLDS.get(content_digest(Path(path).read_bytes()), lambda: load_world(path))
 
@@ -414,7 +424,7 @@ def world_files(path) -> dict:
 
 
 def load_world(path) -> WorldSpec:
-    """Load and check a world file (see the module docstring): every file it names and every key.
+    r"""Load and check a world file (see the module docstring): every file it names and every key.
 
     Parameters
     ----------
@@ -431,6 +441,22 @@ def load_world(path) -> WorldSpec:
     ValueError
         Any bad key or file (also a missing file the world file names): the message starts with the world file
         and names the key (and, for errors inside a named file, that file and its field).
+
+    Examples
+    --------
+    A world file that uses the embedded floor plan (``builtin``) with one named source:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from psgsl_pgm.sim import load_world
+    >>> text = ("builtin: default_house\nontology: house\ngas: smoke\nwind: {speed: 0.2}\n"
+    ...         "sources: {hallway: [5.0, 6.0]}\n")
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     path = Path(d) / "world.yaml"
+    ...     _ = path.write_text(text)
+    ...     spec = load_world(path)
+    >>> spec.gas, spec.sources
+    ('smoke', {'hallway': (5.0, 6.0)})
     """
     wpath, data = read_yaml_mapping(path)
     where = str(wpath)
@@ -738,6 +764,18 @@ def check_free_cells(spec: WorldSpec, seed: int = 0, *, limit: int = MAX_FREE_CE
     ------
     ValueError
         More free cells than ``limit``; the message names ``resolution`` and a value that fits.
+
+    Examples
+    --------
+    >>> from psgsl_pgm.sim import check_free_cells, default_world
+    >>> spec = default_world()
+    >>> check_free_cells(spec) is None                        # the embedded house fits
+    True
+    >>> try:
+    ...     check_free_cells(spec, limit=1000)
+    ... except ValueError as err:
+    ...     print("set 'resolution: 0.4'" in str(err))          # the message names a resolution that fits
+    True
     """
     house = spec.house(seed)
     g = house.grid

@@ -36,6 +36,11 @@ def survey(house, poses, semantic_map, *, seed, camera=None, detector=None, laye
     psgsl_pgm.sim.SemanticMap
         ``semantic_map``, updated.
 
+    Raises
+    ------
+    ValueError
+        ``poses`` is not (P, 3), or :func:`psgsl_pgm.sim.take_frame` refuses the detector or the frame.
+
     Examples
     --------
     >>> import numpy as np
@@ -79,6 +84,11 @@ def candidate_poses(house, *, spacing, n_headings=8, clearance=0.3):
     poses : (Q · n_headings, 3) ndarray
         (x, y, heading), position-major: ``poses.reshape(Q, n_headings, 3)`` groups the headings of one
         position.
+
+    Raises
+    ------
+    ValueError
+        ``spacing`` is not a positive number, ``n_headings`` is not a positive int, or ``clearance`` is negative.
 
     Examples
     --------

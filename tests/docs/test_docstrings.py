@@ -4,6 +4,10 @@ The reference is written from the numpydoc docstrings, so a parameter the ``Para
 parameter a reader of the page cannot learn about. The functions that still leave some out are listed in
 ``docstring_gaps.txt`` beside this file, one ``name: param, param`` per line: a function not listed, and a parameter
 not listed, must be described. Fill a gap, then remove it from the list.
+
+Every public function's page also shows a runnable ``Examples`` section (the doctests run in
+``tests/test_doctests.py``). A function that cannot have one yet is listed in ``example_gaps.txt``, one name per line
+with the reason as a ``# comment``; a listed function that has gained an example must come off the list.
 """
 
 from __future__ import annotations
@@ -18,6 +22,8 @@ PUBLIC_PACKAGES = ("psgsl_pgm", "psgsl_pgm.networks", "psgsl_pgm.olfaction", "ps
                    "psgsl_pgm.experiment", "psgsl_pgm.search", "psgsl_pgm.ros", "psgsl_pgm.teaching",
                    "psgsl_pgm.gym")
 GAPS_FILE = Path(__file__).with_name("docstring_gaps.txt")
+EXAMPLE_GAPS_FILE = Path(__file__).with_name("example_gaps.txt")
+EXAMPLES = re.compile(r"^\s*Examples\n\s*-{4,}", re.M)
 SECTION = re.compile(r"^(\s*)Parameters\n\1-{4,}\n(.*?)(?=^\1\S[^\n]*\n\1-{4,}\n|\Z)", re.M | re.S)
 
 
@@ -108,3 +114,59 @@ def test_the_gap_list_holds_no_filled_gap():
         if filled:
             stale[name] = filled
     assert stale == {}, f"docstring_gaps.txt lists parameters that are described now (remove them): {stale}"
+
+
+def has_examples(func) -> bool:
+    """Whether the docstring has a numpydoc ``Examples`` section."""
+    return EXAMPLES.search(func.__doc__ or "") is not None
+
+
+def known_example_gaps() -> dict:
+    """'package.name' -> reason, from ``example_gaps.txt`` (``name  # reason`` per line)."""
+    gaps = {}
+    for line in EXAMPLE_GAPS_FILE.read_text().splitlines():
+        name, _, reason = line.partition("#")
+        if name.strip():
+            gaps[name.strip()] = reason.strip()
+    return gaps
+
+
+def test_the_examples_section_is_recognised():
+    def with_example():
+        """Summary.
+
+        Examples
+        --------
+        >>> 1 + 1
+        2
+        """
+
+    def without():
+        """Summary.
+
+        Notes
+        -----
+        The word Examples in prose is not a section.
+        """
+
+    assert has_examples(with_example) and not has_examples(without)
+
+
+def test_every_public_function_has_an_example():
+    gaps = known_example_gaps()
+    missing = sorted(name for name, f in public_functions().items() if not has_examples(f) and name not in gaps)
+    assert missing == [], f"public functions without an Examples section (add a runnable example): {missing}"
+
+
+def test_the_example_gap_list_holds_no_filled_gap():
+    """A function that has an example since it was listed comes off the list, so the list only shrinks."""
+    functions = public_functions()
+    stale = {}
+    for name in known_example_gaps():
+        if name not in functions:  # a package of an extra that is not installed, or a name that went away
+            if name.rsplit(".", 1)[0] in sys.modules:
+                stale[name] = "not a public function"
+            continue
+        if has_examples(functions[name]):
+            stale[name] = "has an Examples section"
+    assert stale == {}, f"example_gaps.txt lists functions that need no entry (remove them): {stale}"
