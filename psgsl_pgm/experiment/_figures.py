@@ -36,6 +36,11 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
     -------
     matplotlib Figure
 
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty (a mean over no runs is not a chart).
+
     Examples
     --------
     One short run (two stops of the tour, 5 s of gas before it):
@@ -51,6 +56,8 @@ def plot_error_chart(runs, *, ax=None, points: int = 201):
     import matplotlib.pyplot as plt
 
     runs = list(runs)
+    if not runs:
+        raise ValueError("runs must hold at least one run, got an empty sequence")
     if ax is None:
         fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     else:
