@@ -100,10 +100,3 @@ def test_missed_hit_rate_reaches_the_estimator_and_keys_runs_only_when_set(house
     with pytest.raises(TypeError, match="missed_hit_rate"):
         ExperimentConfig(missed_hit_rate=True)
 
-
-def test_the_error_chart_refuses_no_runs():
-    pytest.importorskip("matplotlib")
-    from psgsl_pgm.experiment import plot_error_chart
-
-    with pytest.raises(ValueError, match="at least one run"):
-        plot_error_chart([])
