@@ -150,7 +150,9 @@ class PMFSEstimator(OlfactoryEstimator):
         self._conf_used = np.empty(0)
         self._score = np.zeros(n)  # Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|]
         self._kernels: dict[int, np.ndarray] = {}  # hit-map kernels in the model's wind, per flat cell
+        self._new_rows: dict[int, np.ndarray] = {}  # h_x(s) on the free cells of cells x not compared yet
         self._kernel_model = self.model
+        self._tables = None  # _RatioTables of the current state (reading_log_ratio)
 
     def _log_factors(self, rows: np.ndarray, h_obs: np.ndarray, conf: np.ndarray) -> np.ndarray:
         """Σ over the given compared cells of log[1 − γ conf_c |ĥ_c − h_c(s)|], for every s."""
@@ -187,9 +189,11 @@ class PMFSEstimator(OlfactoryEstimator):
         self._hitmap = hitmap
         self._score = score
         self._h_used, self._conf_used = h_obs, conf
+        self._tables = None  # the hit map moved: the current factors change
         if new:
             self._slot[flat] = len(self._cells)
             self._cells.append(flat)
+            self._new_rows.pop(flat, None)
 
     def reading_log_ratio(self, positions) -> np.ndarray:
         """How one more reading would move the posterior: λ [S'(s) − S(s)] for a miss and for a hit at each position.
@@ -203,8 +207,10 @@ class PMFSEstimator(OlfactoryEstimator):
         to do (the policies of :mod:`psgsl_pgm.search`). The kernel is oriented by the model's wind at x (the
         wind the reading will bring is not known before it); the state is not changed.
 
-        Only the compared cells within the kernel's reach change, so the cost is one log per free cell for each of
-        them and for x itself; the kernels are cached per cell until the plume model changes.
+        Only the compared cells within the kernel's reach change, so the cost is two logs (miss, hit) per free
+        cell for each of them and for x itself; their current factors are computed once per state of the
+        estimator and shared by every position (:class:`_RatioTables`), and the kernels and the rows h_x(s) of
+        cells not compared yet are cached per cell until the plume model changes.
 
         Parameters
         ----------
@@ -225,7 +231,10 @@ class PMFSEstimator(OlfactoryEstimator):
         compared = np.asarray(self._cells, dtype=np.int64)
         if self._kernel_model is not self.model:
             self._kernels.clear()
+            self._new_rows.clear()
             self._kernel_model = self.model
+        tables = self._ratio_tables(compared)
+        free = tables.free  # only the free cells are computed: the output is 0 elsewhere
         for k, flat in enumerate(cells.tolist()):
             w = self._kernels.get(flat)
             if w is None:
@@ -234,27 +243,30 @@ class PMFSEstimator(OlfactoryEstimator):
             slots = np.flatnonzero(w[compared] > 0) if compared.size else np.zeros(0, np.int64)
             new = flat not in self._slot
             at = compared[slots]
+            rows = tables.pred(slots)
             if new:  # x joins the compared cells with its own row h_x(s)
                 at = np.append(at, flat)
-                row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0])
-                rows = np.concatenate([self._pred[slots], row_new[None]])
-            else:
-                rows = self._pred[slots]
+                row_new = self._new_rows.get(flat)
+                if row_new is None:
+                    row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0][free])
+                    self._new_rows[flat] = row_new
+                rows = np.concatenate([rows, row_new[None]])
+            old = tables.old_sum(slots, new)  # Σ of the current factors of the compared cells x's kernel reaches
             weight = hm._weight[at]
-            h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
-            conf_old = -np.expm1(-weight / n0)
-            old = np.log1p(-self.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
-            if new:
-                old[-1] = 0.0  # x was not compared before: no factor
-            old = old.sum(axis=0)
             weight_new = weight + w[at]
             conf_new = -np.expm1(-weight_new / n0)
             for g in (0, 1):
                 h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
                 fac = np.log1p(-self.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
-                out[k, g] = self.tempering * (fac.sum(axis=0) - old)
-        out[:, :, ~self.geometry.free.ravel()] = 0.0
+                out[k, g, free] = self.tempering * (fac.sum(axis=0) - old)
         return out.reshape((len(cells), 2) + self.geometry.shape)
+
+    def _ratio_tables(self, compared: np.ndarray) -> "_RatioTables":
+        """The :class:`_RatioTables` of the current hit map, compared cells and plume model (built once per state)."""
+        t = self._tables
+        if t is None or t.model is not self.model or t.hitmap is not self._hitmap or t.n_compared != compared.size:
+            t = self._tables = _RatioTables(self, compared)
+        return t
 
     @property
     def score(self) -> np.ndarray:
@@ -270,3 +282,60 @@ class PMFSEstimator(OlfactoryEstimator):
     def compared_cells(self) -> np.ndarray:
         """(K, 2) int64 (row, col) of the cells whose hit estimates enter the score."""
         return np.array([divmod(f, self.geometry.shape[1]) for f in self._cells], dtype=np.int64).reshape(-1, 2)
+
+
+class _RatioTables:
+    """What :meth:`PMFSEstimator.reading_log_ratio` shares between candidate positions in one state of the
+    estimator, on the free cells only (the ratio is 0 elsewhere).
+
+    The current factor of compared cell c, log[1 − γ conf_c abs(ĥ_c − h_c(s))] for every free s, does not depend on
+    the candidate: its row is computed the first time a candidate's kernel reaches c, with the same floating-point
+    operations per element as a candidate's own rows, and reused. A candidate's old score is the sum of its
+    compared cells' rows in slot order (a zero row last when x is new) over the same (m, N') shape, so it is the
+    very number the per-candidate computation gives.
+
+    Parameters
+    ----------
+    est : PMFSEstimator
+        The estimator, in the state the tables describe.
+    compared : (K,) ndarray of int64
+        Flat indices of its compared cells, in slot order.
+    """
+
+    __slots__ = ("model", "hitmap", "n_compared", "free", "_est", "_compared", "_pred", "_old", "_done")
+
+    def __init__(self, est: PMFSEstimator, compared: np.ndarray):
+        self.model, self.hitmap, self.n_compared = est.model, est._hitmap, compared.size
+        self.free = np.flatnonzero(est.geometry.free.ravel())  # (N',) flat free cells
+        self._est, self._compared = est, compared
+        self._pred = np.empty((compared.size, self.free.size))  # h_c(s) on the free cells
+        self._old = np.empty((compared.size, self.free.size))  # log[1 − γ conf_c abs(ĥ_c − h_c(s))]
+        self._done = np.zeros(compared.size, bool)
+
+    def _fill(self, slots: np.ndarray) -> None:
+        todo = slots[~self._done[slots]]
+        if not todo.size:
+            return
+        est, hm = self._est, self.hitmap
+        m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+        at = self._compared[todo]
+        rows = est._pred[todo][:, self.free]
+        weight = hm._weight[at]
+        h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
+        conf_old = -np.expm1(-weight / n0)
+        self._pred[todo] = rows
+        self._old[todo] = np.log1p(-est.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
+        self._done[todo] = True
+
+    def pred(self, slots: np.ndarray) -> np.ndarray:
+        """(m, N') h_c(s) of the compared cells ``slots`` (a new array)."""
+        self._fill(slots)
+        return self._pred[slots]
+
+    def old_sum(self, slots: np.ndarray, new: bool) -> np.ndarray:
+        """(N',) Σ over ``slots`` of the current factors, a zero row added last when ``new``."""
+        self._fill(slots)
+        old = self._old[slots]
+        if new:
+            old = np.concatenate([old, np.zeros((1, old.shape[1]))])
+        return old.sum(axis=0)
