@@ -150,7 +150,7 @@ class PMFSEstimator(OlfactoryEstimator):
         self._conf_used = np.empty(0)
         self._score = np.zeros(n)  # Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|]
         self._kernels: dict[int, np.ndarray] = {}  # hit-map kernels in the model's wind, per flat cell
-        self._new_rows: dict[int, np.ndarray] = {}  # h_x(s) on the free cells of cells x not compared yet
+        self._new_rows: dict[int, _NewCellRows] = {}  # h_x(s) and x's factors, for cells x not compared yet
         self._kernel_model = self.model
         self._tables = None  # _RatioTables of the current state (reading_log_ratio)
 
@@ -246,18 +246,22 @@ class PMFSEstimator(OlfactoryEstimator):
             rows = tables.pred(slots)
             if new:  # x joins the compared cells with its own row h_x(s)
                 at = np.append(at, flat)
-                row_new = self._new_rows.get(flat)
-                if row_new is None:
+                x_rows = self._new_rows.get(flat)
+                if x_rows is None:
                     row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0][free])
-                    self._new_rows[flat] = row_new
-                rows = np.concatenate([rows, row_new[None]])
+                    x_rows = self._new_rows[flat] = _NewCellRows(row_new)
             old = tables.old_sum(slots, new)  # Σ of the current factors of the compared cells x's kernel reaches
             weight = hm._weight[at]
             weight_new = weight + w[at]
             conf_new = -np.expm1(-weight_new / n0)
             for g in (0, 1):
                 h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
-                fac = np.log1p(-self.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
+                if new:  # the compared cells' factors, then x's own (cached while ĥ_x and conf_x stay)
+                    fac = np.log1p(-self.discrimination * conf_new[:-1, None] * np.abs(h_new[:-1, None] - rows))
+                    fac_x = x_rows.factor(g, h_new[-1], conf_new[-1], self.discrimination)
+                    fac = np.concatenate([fac, fac_x[None]])
+                else:
+                    fac = np.log1p(-self.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
                 out[k, g, free] = self.tempering * (fac.sum(axis=0) - old)
         return out.reshape((len(cells), 2) + self.geometry.shape)
 
@@ -339,3 +343,31 @@ class _RatioTables:
         if new:
             old = np.concatenate([old, np.zeros((1, old.shape[1]))])
         return old.sum(axis=0)
+
+
+class _NewCellRows:
+    """A cell x not compared yet, for :meth:`PMFSEstimator.reading_log_ratio`: its row h_x(s) on the free cells
+    and the factor rows log[1 − γ conf_x abs(ĥ_x − h_x(s))] of a miss and of a hit there, kept with the ĥ_x and
+    conf_x they were computed for: while the hit map at x does not move, a later state asks for the same numbers
+    (the same operations on the same inputs) and gets them without a log.
+
+    Parameters
+    ----------
+    row : (N',) ndarray of float64
+        h_x(s) = 1 − exp(−κ G(x | s)) on the free cells.
+    """
+
+    __slots__ = ("row", "_key", "_factor")
+
+    def __init__(self, row: np.ndarray):
+        self.row = row
+        self._key: list = [None, None]  # per outcome g: (ĥ_x, conf_x, γ) of the cached factor
+        self._factor: list = [None, None]
+
+    def factor(self, g: int, h: float, conf: float, discrimination: float) -> np.ndarray:
+        """(N',) log[1 − γ conf abs(h − h_x(s))] for outcome ``g`` (cached; do not modify)."""
+        key = (float(h), float(conf), float(discrimination))
+        if self._key[g] != key:
+            self._factor[g] = np.log1p(-discrimination * np.float64(conf) * np.abs(np.float64(h) - self.row))
+            self._key[g] = key
+        return self._factor[g]
