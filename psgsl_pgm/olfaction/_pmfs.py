@@ -228,13 +228,17 @@ class PMFSEstimator(OlfactoryEstimator):
         out = np.zeros((len(cells), 2, n))
         hm = self._hitmap
         m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+        gamma, lam = self.discrimination, self.tempering
         compared = np.asarray(self._cells, dtype=np.int64)
         if self._kernel_model is not self.model:
             self._kernels.clear()
             self._new_rows.clear()
             self._kernel_model = self.model
         tables = self._ratio_tables(compared)
-        free = tables.free  # only the free cells are computed: the output is 0 elsewhere
+        # λ [Σ_c log(1 − γ conf'_c |ĥ'_c − h_c(s)|) − Σ_c log(1 − γ conf_c |ĥ_c − h_c(s)|)] over the compared cells
+        # c in x's kernel (and x), each sum accumulated row by row from 0 in slot order, x last: the additions of
+        # numpy's sum over the first axis of the stacked rows (for more than one column; a map of one cell has
+        # at most two rows, which numpy's pairwise sum also adds in order)
         for k, flat in enumerate(cells.tolist()):
             w = self._kernels.get(flat)
             if w is None:
@@ -242,27 +246,34 @@ class PMFSEstimator(OlfactoryEstimator):
                 w = self._kernels[flat] = hm.kernel((r, c), tuple(self.model.wind[r, c]))
             slots = np.flatnonzero(w[compared] > 0) if compared.size else np.zeros(0, np.int64)
             new = flat not in self._slot
+            if not slots.size and not new:
+                continue  # no factor changes: λ (0 − 0) = 0
             at = compared[slots]
-            rows = tables.pred(slots)
             if new:  # x joins the compared cells with its own row h_x(s)
                 at = np.append(at, flat)
                 x_rows = self._new_rows.get(flat)
                 if x_rows is None:
-                    row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0][free])
+                    row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0])
                     x_rows = self._new_rows[flat] = _NewCellRows(row_new)
-            old = tables.old_sum(slots, new)  # Σ of the current factors of the compared cells x's kernel reaches
             weight = hm._weight[at]
             weight_new = weight + w[at]
             conf_new = -np.expm1(-weight_new / n0)
+            old = tables.old_sum(slots, new) if slots.size else None  # Σ of the current factors (0 without any)
+            rows = self._pred[slots]
             for g in (0, 1):
                 h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
-                if new:  # the compared cells' factors, then x's own (cached while ĥ_x and conf_x stay)
-                    fac = np.log1p(-self.discrimination * conf_new[:-1, None] * np.abs(h_new[:-1, None] - rows))
-                    fac_x = x_rows.factor(g, h_new[-1], conf_new[-1], self.discrimination)
-                    fac = np.concatenate([fac, fac_x[None]])
-                else:
-                    fac = np.log1p(-self.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
-                out[k, g, free] = self.tempering * (fac.sum(axis=0) - old)
+                dst = out[k, g]
+                if new and not slots.size:  # x's own factor alone: λ (x's factor − 0), cached
+                    dst[:] = x_rows.alone(g, h_new[-1], conf_new[-1], gamma, lam)
+                    continue
+                fac = np.log1p(-gamma * conf_new[:slots.size, None] * np.abs(h_new[:slots.size, None] - rows))
+                for row in fac:
+                    dst += row
+                if new:
+                    dst += x_rows.factor(g, h_new[-1], conf_new[-1], gamma)
+                dst -= old
+                dst *= lam
+        out[:, :, ~self.geometry.free.ravel()] = 0.0
         return out.reshape((len(cells), 2) + self.geometry.shape)
 
     def _ratio_tables(self, compared: np.ndarray) -> "_RatioTables":
@@ -290,13 +301,9 @@ class PMFSEstimator(OlfactoryEstimator):
 
 class _RatioTables:
     """What :meth:`PMFSEstimator.reading_log_ratio` shares between candidate positions in one state of the
-    estimator, on the free cells only (the ratio is 0 elsewhere).
-
-    The current factor of compared cell c, log[1 − γ conf_c abs(ĥ_c − h_c(s))] for every free s, does not depend on
-    the candidate: its row is computed the first time a candidate's kernel reaches c, with the same floating-point
-    operations per element as a candidate's own rows, and reused. A candidate's old score is the sum of its
-    compared cells' rows in slot order (a zero row last when x is new) over the same (m, N') shape, so it is the
-    very number the per-candidate computation gives.
+    estimator: the current factor of each compared cell c, log[1 − γ conf_c abs(ĥ_c − h_c(s))] for every s. It
+    does not depend on the candidate; its row is computed the first time a candidate's kernel reaches c, with
+    the same floating-point operations per element as a candidate's own rows, and reused.
 
     Parameters
     ----------
@@ -306,68 +313,72 @@ class _RatioTables:
         Flat indices of its compared cells, in slot order.
     """
 
-    __slots__ = ("model", "hitmap", "n_compared", "free", "_est", "_compared", "_pred", "_old", "_done")
+    __slots__ = ("model", "hitmap", "n_compared", "_est", "_compared", "_old", "_done")
 
     def __init__(self, est: PMFSEstimator, compared: np.ndarray):
         self.model, self.hitmap, self.n_compared = est.model, est._hitmap, compared.size
-        self.free = np.flatnonzero(est.geometry.free.ravel())  # (N',) flat free cells
         self._est, self._compared = est, compared
-        self._pred = np.empty((compared.size, self.free.size))  # h_c(s) on the free cells
-        self._old = np.empty((compared.size, self.free.size))  # log[1 − γ conf_c abs(ĥ_c − h_c(s))]
+        self._old = np.empty((compared.size, est.geometry.shape[0] * est.geometry.shape[1]))
         self._done = np.zeros(compared.size, bool)
 
-    def _fill(self, slots: np.ndarray) -> None:
-        todo = slots[~self._done[slots]]
-        if not todo.size:
-            return
-        est, hm = self._est, self.hitmap
-        m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
-        at = self._compared[todo]
-        rows = est._pred[todo][:, self.free]
-        weight = hm._weight[at]
-        h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
-        conf_old = -np.expm1(-weight / n0)
-        self._pred[todo] = rows
-        self._old[todo] = np.log1p(-est.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
-        self._done[todo] = True
-
-    def pred(self, slots: np.ndarray) -> np.ndarray:
-        """(m, N') h_c(s) of the compared cells ``slots`` (a new array)."""
-        self._fill(slots)
-        return self._pred[slots]
-
     def old_sum(self, slots: np.ndarray, new: bool) -> np.ndarray:
-        """(N',) Σ over ``slots`` of the current factors, a zero row added last when ``new``."""
-        self._fill(slots)
-        old = self._old[slots]
+        """(H·W,) the sum of the current factors of ``slots``, a zero row added last when ``new``: the rows added
+        one by one to 0 in slot order, as numpy sums the stacked rows over their first axis (a new array)."""
+        todo = slots[~self._done[slots]]
+        if todo.size:
+            est, hm = self._est, self.hitmap
+            m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+            at = self._compared[todo]
+            weight = hm._weight[at]
+            h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
+            conf_old = -np.expm1(-weight / n0)
+            rows = est._pred[todo]
+            self._old[todo] = np.log1p(-est.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
+            self._done[todo] = True
+        acc = np.zeros(self._old.shape[1])
+        for s in slots.tolist():
+            acc += self._old[s]
         if new:
-            old = np.concatenate([old, np.zeros((1, old.shape[1]))])
-        return old.sum(axis=0)
+            acc += 0.0
+        return acc
 
 
 class _NewCellRows:
-    """A cell x not compared yet, for :meth:`PMFSEstimator.reading_log_ratio`: its row h_x(s) on the free cells
-    and the factor rows log[1 − γ conf_x abs(ĥ_x − h_x(s))] of a miss and of a hit there, kept with the ĥ_x and
-    conf_x they were computed for: while the hit map at x does not move, a later state asks for the same numbers
-    (the same operations on the same inputs) and gets them without a log.
+    """A cell x not compared yet, for :meth:`PMFSEstimator.reading_log_ratio`: its row h_x(s) and the factor rows
+    log[1 − γ conf_x abs(ĥ_x − h_x(s))] of a miss and of a hit there, kept with the ĥ_x, conf_x (and γ, λ) they
+    were computed for: while the hit map at x does not move, a later state asks for the same numbers (the same
+    operations on the same inputs) and gets them without a log.
 
     Parameters
     ----------
-    row : (N',) ndarray of float64
-        h_x(s) = 1 − exp(−κ G(x | s)) on the free cells.
+    row : (H·W,) ndarray of float64
+        h_x(s) = 1 − exp(−κ G(x | s)).
     """
 
-    __slots__ = ("row", "_key", "_factor")
+    __slots__ = ("row", "_key", "_factor", "_alone")
 
     def __init__(self, row: np.ndarray):
         self.row = row
         self._key: list = [None, None]  # per outcome g: (ĥ_x, conf_x, γ) of the cached factor
         self._factor: list = [None, None]
+        self._alone: list = [None, None]  # per outcome: (λ, λ (0 + factor − 0))
 
     def factor(self, g: int, h: float, conf: float, discrimination: float) -> np.ndarray:
-        """(N',) log[1 − γ conf abs(h − h_x(s))] for outcome ``g`` (cached; do not modify)."""
+        """(H·W,) log[1 − γ conf abs(h − h_x(s))] for outcome ``g`` (cached; do not modify)."""
         key = (float(h), float(conf), float(discrimination))
         if self._key[g] != key:
             self._factor[g] = np.log1p(-discrimination * np.float64(conf) * np.abs(np.float64(h) - self.row))
-            self._key[g] = key
+            self._key[g], self._alone[g] = key, None
         return self._factor[g]
+
+    def alone(self, g: int, h: float, conf: float, discrimination: float, tempering: float) -> np.ndarray:
+        """(H·W,) λ [(0 + factor) − 0], the ratio of a reading at x when no compared cell is in its kernel: the
+        operations of the general sum (cached; do not modify)."""
+        fac = self.factor(g, h, conf, discrimination)
+        if self._alone[g] is None or self._alone[g][0] != tempering:
+            out = np.zeros(fac.size)
+            out += fac
+            out -= 0.0
+            out *= tempering
+            self._alone[g] = (float(tempering), out)
+        return self._alone[g][1]
