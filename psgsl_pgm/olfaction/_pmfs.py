@@ -235,6 +235,10 @@ class PMFSEstimator(OlfactoryEstimator):
             self._new_rows.clear()
             self._kernel_model = self.model
         tables = self._ratio_tables(compared)
+        missing = list(dict.fromkeys(f for f in cells.tolist() if f not in self._slot and f not in self._new_rows))
+        if missing:  # the rows h_x(s) of new cells: their adjoint solves together (the same numbers per column)
+            for f, g_row in zip(missing, self.model.green_rows(missing)):
+                self._new_rows[f] = _NewCellRows(-np.expm1(-self.model.encounter_scale * g_row))
         # λ [Σ_c log(1 − γ conf'_c |ĥ'_c − h_c(s)|) − Σ_c log(1 − γ conf_c |ĥ_c − h_c(s)|)] over the compared cells
         # c in x's kernel (and x), each sum accumulated row by row from 0 in slot order, x last: the additions of
         # numpy's sum over the first axis of the stacked rows (for more than one column; a map of one cell has
@@ -251,10 +255,7 @@ class PMFSEstimator(OlfactoryEstimator):
             at = compared[slots]
             if new:  # x joins the compared cells with its own row h_x(s)
                 at = np.append(at, flat)
-                x_rows = self._new_rows.get(flat)
-                if x_rows is None:
-                    row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0])
-                    x_rows = self._new_rows[flat] = _NewCellRows(row_new)
+                x_rows = self._new_rows[flat]
             weight = hm._weight[at]
             weight_new = weight + w[at]
             conf_new = -np.expm1(-weight_new / n0)
