@@ -97,6 +97,32 @@ def test_pmfs_posterior_concentrates_on_the_source_region_in_a_uniform_wind_corr
     assert abs(est.wind_estimate[6, 20, 0] - 0.4) < 0.05
 
 
+def test_pmfs_kept_score_terms_give_the_score_bit_for_bit():
+    """The score with its per-cell terms kept between readings (only the cells whose ω or ℓ moved recomputed) is
+    :meth:`FilamentPMFS._score` computed afresh, bit for bit, at every reading across refreshes (a new simulation
+    restarts the terms), for every region and for the first-level regions that :meth:`hit_variance` weighs;
+    and two estimators, one asked for its hit variance after every reading, keep the same posterior."""
+    model = _corridor()
+    a = FilamentPMFS(model, seed=4, refresh=4, record_steps=40, warmup_steps=20, discrimination=0.8)
+    b = FilamentPMFS(model, seed=4, refresh=4, record_steps=40, warmup_steps=20, discrimination=0.8)
+    rng = np.random.default_rng(6)
+    terms = set()
+    for x in [(x, y) for x in np.arange(0.25, 3.9, 0.45) for y in (0.35, 0.85)]:
+        wind = (0.4 + 0.05 * rng.normal(), 0.05 * rng.normal())
+        hit = bool(rng.random() < 0.3)
+        a.update(x, hit, wind=wind)
+        b.update(x, hit, wind=wind)
+        fresh = a._score(a._sim, None, a._log_odds, a._omega)
+        assert a._score_kept(a._sim, a._log_odds, a._omega).tobytes() == fresh.tobytes()
+        coarse = np.unique(a._coarse)
+        kept = a._score_kept(a._sim, a._log_odds, a._omega, rows=coarse)
+        assert kept.tobytes() == a._score(a._sim[coarse], None, a._log_odds, a._omega).tobytes()
+        a.hit_variance()
+        terms.add(id(a._terms))
+        assert a.posterior.tobytes() == b.posterior.tobytes()
+    assert len(terms) >= 3  # the simulations were refreshed, and the kept terms with them
+
+
 def test_pmfs_hit_map_confidence_and_score_by_hand():
     """One hit then one miss at one cell: ĥ there is σ(logit 0.6 + logit 0.05 − logit 0.1), its confidence
     1 − exp(−2 / 0.25), and the posterior is exp Σ_c log[1 − conf_c |ĥ_c − h_c(k)|] over the region's maps."""
