@@ -235,6 +235,7 @@ class PMFSEstimator(OlfactoryEstimator):
             self._new_rows.clear()
             self._kernel_model = self.model
         tables = self._ratio_tables(compared)
+        buf = np.empty(n)  # one row of factors at a time (no (m, H·W) temporaries)
         missing = list(dict.fromkeys(f for f in cells.tolist() if f not in self._slot and f not in self._new_rows))
         if missing:  # the rows h_x(s) of new cells: their adjoint solves together (the same numbers per column)
             for f, g_row in zip(missing, self.model.green_rows(missing)):
@@ -260,16 +261,19 @@ class PMFSEstimator(OlfactoryEstimator):
             weight_new = weight + w[at]
             conf_new = -np.expm1(-weight_new / n0)
             old = tables.old_sum(slots, new) if slots.size else None  # Σ of the current factors (0 without any)
-            rows = self._pred[slots]
+            coef = -gamma * conf_new[: slots.size]  # −γ conf'_c
             for g in (0, 1):
                 h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
                 dst = out[k, g]
                 if new and not slots.size:  # x's own factor alone: λ (x's factor − 0), cached
                     dst[:] = x_rows.alone(g, h_new[-1], conf_new[-1], gamma, lam)
                     continue
-                fac = np.log1p(-gamma * conf_new[:slots.size, None] * np.abs(h_new[:slots.size, None] - rows))
-                for row in fac:
-                    dst += row
+                for i, slot in enumerate(slots.tolist()):  # log1p(−γ conf'_c abs(ĥ'_c − h_c(s))), one row at a time
+                    np.subtract(h_new[i], self._pred[slot], out=buf)
+                    np.abs(buf, out=buf)
+                    np.multiply(coef[i], buf, out=buf)
+                    np.log1p(buf, out=buf)
+                    dst += buf
                 if new:
                     dst += x_rows.factor(g, h_new[-1], conf_new[-1], gamma)
                 dst -= old
