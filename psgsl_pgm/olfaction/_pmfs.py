@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
 from .._shared._validate import positive, unit_interval
@@ -150,7 +152,7 @@ class PMFSEstimator(OlfactoryEstimator):
         self._conf_used = np.empty(0)
         self._score = np.zeros(n)  # Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|]
         self._kernels: dict[int, np.ndarray] = {}  # hit-map kernels in the model's wind, per flat cell
-        self._new_rows: dict[int, _NewCellRows] = {}  # h_x(s) and x's factors, for cells x not compared yet
+        self._new_rows: OrderedDict[int, _NewCellRows] = OrderedDict()  # h_x(s) and x's factors, cells not compared
         self._kernel_model = self.model
         self._tables = None  # _RatioTables of the current state (reading_log_ratio)
 
@@ -236,10 +238,16 @@ class PMFSEstimator(OlfactoryEstimator):
             self._kernel_model = self.model
         tables = self._ratio_tables(compared)
         buf = np.empty(n)  # one row of factors at a time (no (m, H·W) temporaries)
-        missing = list(dict.fromkeys(f for f in cells.tolist() if f not in self._slot and f not in self._new_rows))
+        rows_of = self._new_rows  # least recently asked first
+        missing = list(dict.fromkeys(f for f in cells.tolist() if f not in self._slot and f not in rows_of))
+        for f in cells.tolist():
+            if f in rows_of:
+                rows_of.move_to_end(f)
         if missing:  # the rows h_x(s) of new cells: their adjoint solves together (the same numbers per column)
             for f, g_row in zip(missing, self.model.green_rows(missing)):
-                self._new_rows[f] = _NewCellRows(-np.expm1(-self.model.encounter_scale * g_row))
+                rows_of[f] = _NewCellRows(-np.expm1(-self.model.encounter_scale * g_row))
+        while len(rows_of) > max(2 * len(cells), 64):  # this call's cells and about as many more
+            rows_of.popitem(last=False)
         # λ [Σ_c log(1 − γ conf'_c |ĥ'_c − h_c(s)|) − Σ_c log(1 − γ conf_c |ĥ_c − h_c(s)|)] over the compared cells
         # c in x's kernel (and x), each sum accumulated row by row from 0 in slot order, x last: the additions of
         # numpy's sum over the first axis of the stacked rows (for more than one column; a map of one cell has
@@ -265,8 +273,10 @@ class PMFSEstimator(OlfactoryEstimator):
             for g in (0, 1):
                 h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
                 dst = out[k, g]
-                if new and not slots.size:  # x's own factor alone: λ (x's factor − 0), cached
-                    dst[:] = x_rows.alone(g, h_new[-1], conf_new[-1], gamma, lam)
+                if new and not slots.size:  # x's own factor alone: λ [(0 + x's factor) − 0]
+                    dst += x_rows.factor(g, h_new[-1], conf_new[-1], gamma)
+                    dst -= 0.0
+                    dst *= lam
                     continue
                 for i, slot in enumerate(slots.tolist()):  # log1p(−γ conf'_c abs(ĥ'_c − h_c(s))), one row at a time
                     np.subtract(h_new[i], self._pred[slot], out=buf)
@@ -350,9 +360,10 @@ class _RatioTables:
 
 class _NewCellRows:
     """A cell x not compared yet, for :meth:`PMFSEstimator.reading_log_ratio`: its row h_x(s) and the factor rows
-    log[1 − γ conf_x abs(ĥ_x − h_x(s))] of a miss and of a hit there, kept with the ĥ_x, conf_x (and γ, λ) they
+    log[1 − γ conf_x abs(ĥ_x − h_x(s))] of a miss and of a hit there, kept with the ĥ_x, conf_x (and γ) they
     were computed for: while the hit map at x does not move, a later state asks for the same numbers (the same
-    operations on the same inputs) and gets them without a log.
+    operations on the same inputs) and gets them without a log. The estimator keeps these for the cells of its
+    last calls only (least recently asked dropped first).
 
     Parameters
     ----------
@@ -360,30 +371,17 @@ class _NewCellRows:
         h_x(s) = 1 − exp(−κ G(x | s)).
     """
 
-    __slots__ = ("row", "_key", "_factor", "_alone")
+    __slots__ = ("row", "_key", "_factor")
 
     def __init__(self, row: np.ndarray):
         self.row = row
         self._key: list = [None, None]  # per outcome g: (ĥ_x, conf_x, γ) of the cached factor
         self._factor: list = [None, None]
-        self._alone: list = [None, None]  # per outcome: (λ, λ (0 + factor − 0))
 
     def factor(self, g: int, h: float, conf: float, discrimination: float) -> np.ndarray:
         """(H·W,) log[1 − γ conf abs(h − h_x(s))] for outcome ``g`` (cached; do not modify)."""
         key = (float(h), float(conf), float(discrimination))
         if self._key[g] != key:
             self._factor[g] = np.log1p(-discrimination * np.float64(conf) * np.abs(np.float64(h) - self.row))
-            self._key[g], self._alone[g] = key, None
+            self._key[g] = key
         return self._factor[g]
-
-    def alone(self, g: int, h: float, conf: float, discrimination: float, tempering: float) -> np.ndarray:
-        """(H·W,) λ [(0 + factor) − 0], the ratio of a reading at x when no compared cell is in its kernel: the
-        operations of the general sum (cached; do not modify)."""
-        fac = self.factor(g, h, conf, discrimination)
-        if self._alone[g] is None or self._alone[g][0] != tempering:
-            out = np.zeros(fac.size)
-            out += fac
-            out -= 0.0
-            out *= tempering
-            self._alone[g] = (float(tempering), out)
-        return self._alone[g][1]

@@ -359,6 +359,10 @@ def test_pmfs_reading_log_ratio_is_the_straight_computation_bit_for_bit():
     for i, (p, h, w) in enumerate(zip(pos, hits, winds)):
         same(est.reading_log_ratio(probe), _straight_reading_log_ratio(est, probe))
         same(est.reading_log_ratio(probe[::-3]), _straight_reading_log_ratio(est, probe[::-3]))  # same state
+        if i % 4 == 0:  # every free cell: the kept rows of the smaller calls are dropped and made again
+            every = (free[:, ::-1] + 0.5) * H
+            same(est.reading_log_ratio(every), _straight_reading_log_ratio(est, every))
+            assert len(est._new_rows) > 2 * len(probe)
         est.update(p, h, None if i % 3 == 0 else w)
         checked += 1
     moved = PlumeModel(occ, resolution=H, wind=wind[:, ::-1] * 0.5, outlets=outlets, diffusivity=0.03,
