@@ -224,6 +224,7 @@ class FilamentPMFS(OlfactoryEstimator):
         self._assign = None  # (n_free,) row of _sim of each free cell's region
         self._n_refresh = 0
         self.n_simulations = 0
+        self._terms = None  # _ScoreTerms of the current simulations (the score's per-cell terms, kept)
 
     def _simulate(self, wind_field: np.ndarray, release: np.ndarray, rng) -> np.ndarray:
         """(len(release), n_blocks) hit frequencies of filaments released at the flat cells ``release`` on
@@ -295,20 +296,41 @@ class FilamentPMFS(OlfactoryEstimator):
         log(1 − conf) = −ω/m², log ĥ = −log(1 + e^{−ℓ}), log(1 − ĥ) = −log(1 + e^{ℓ}) and
         1 − abs(ĥ − h) = (1 − ĥ) + h where ĥ ≥ h, (1 − h) + ĥ elsewhere: every factor stays positive and finite
         however confident a cell and however saturated its ĥ (PMFS's product would round to zero)."""
+        cells, x, ell = self._score_cells(log_odds, omega)
+        with np.errstate(divide="ignore"):  # log 0 = −inf enters logaddexp only beside a finite term
+            log_sim, log_not_sim = np.log(sim), np.log1p(-sim)
+        return self._score_terms(sim, log_sim, log_not_sim, self._block[cells], x, ell).sum(axis=1)
+
+    def _score_cells(self, log_odds: np.ndarray, omega: np.ndarray):
+        """The cells the score runs over (flat, the free cells with positive confidence), their ω/m² and ℓ."""
         x = omega / self.confidence_weight ** 2
         cells = np.flatnonzero((x > 0) & self.geometry.free.ravel())
-        x = x[cells]
+        return cells, x[cells], log_odds[cells] + _logit(self.prior_hit)
+
+    def _score_terms(self, sim, log_sim, log_not_sim, blocks, x, ell) -> np.ndarray:
+        """(K, len(blocks)) the terms log[(1 − conf) + conf (...)] of :meth:`_score` of the cells in the blocks
+        ``blocks`` with ω/m² ``x`` and log-odds ``ell``, for the rows of ``sim`` (``log_sim``, ``log_not_sim``: its
+        log and log(1 − ·), (K, n_blocks)). Elementwise: a cell's column depends on its own inputs only."""
         log_conf = np.log(-np.expm1(-x))
-        ell = (log_odds[cells] + _logit(self.prior_hit))[None, :]
+        ell = ell[None, :]
         log_h, log_not_h = -np.logaddexp(0.0, -ell), -np.logaddexp(0.0, ell)  # log ĥ, log(1 − ĥ)
-        h_sim = sim[:, self._block[cells]]
-        with np.errstate(divide="ignore"):  # log 0 = −inf enters logaddexp only beside a finite term
-            log_sim, log_not_sim = np.log(h_sim), np.log1p(-h_sim)
-            log_close = np.where(expit(ell) >= h_sim, np.logaddexp(log_not_h, log_sim),
-                                 np.logaddexp(log_not_sim, log_h))  # log(1 − abs(ĥ − h))
-            g = self.discrimination
-            log_g = np.logaddexp(np.log1p(-g), np.log(g) + log_close) if g < 1 else log_close
-        return np.logaddexp(-x[None, :], log_conf[None, :] + log_g).sum(axis=1)
+        h_sim = sim[:, blocks]
+        log_sim, log_not_sim = log_sim[:, blocks], log_not_sim[:, blocks]
+        log_close = np.where(expit(ell) >= h_sim, np.logaddexp(log_not_h, log_sim),
+                             np.logaddexp(log_not_sim, log_h))  # log(1 − abs(ĥ − h))
+        g = self.discrimination
+        log_g = np.logaddexp(np.log1p(-g), np.log(g) + log_close) if g < 1 else log_close
+        return np.logaddexp(-x[None, :], log_conf[None, :] + log_g)
+
+    def _score_kept(self, sim: np.ndarray, log_odds: np.ndarray, omega: np.ndarray, rows=None) -> np.ndarray:
+        """:meth:`_score` of ``sim`` (or of its rows ``rows``), the same numbers, with the per-cell terms kept
+        between calls for as long as ``sim`` is the same array: a reading changes ℓ and ω only near it, and only
+        the cells whose inputs changed (or that are new to the sum) are computed again."""
+        t = self._terms
+        if t is None or t.sim is not sim:
+            t = self._terms = _ScoreTerms(self, sim)
+        cells, x, ell = self._score_cells(log_odds, omega)
+        return t.score(cells, x, ell, rows)
 
     def _propose(self, obs: Observation):
         wind = self._wind
@@ -323,7 +345,7 @@ class FilamentPMFS(OlfactoryEstimator):
         if sim is None or (n - 1) % self.refresh == 0:
             sim, assign = self._refresh(wind.field(), log_odds, omega)
             n_refresh += 1
-        score = self._score(sim, assign, log_odds, omega)
+        score = self._score_kept(sim, log_odds, omega)
         log_lik = np.zeros(self._log_prior.size)
         log_lik[self.geometry.free.ravel()] = self.tempering * score[assign]
         return log_lik, (wind, log_odds, omega, sim, assign, n_refresh)
@@ -378,7 +400,7 @@ class FilamentPMFS(OlfactoryEstimator):
         mass = np.isfinite(self._log_prior[free])
         coarse = np.unique(self._coarse[mass])  # the first level: every region with prior mass
         sim = self._sim[coarse]
-        score = self._score(sim, None, self._log_odds, self._omega)
+        score = self._score_kept(self._sim, self._log_odds, self._omega, rows=coarse)  # = _score(sim, ...)
         w = np.exp(score - score.max())
         h = sim[:, self._block[free]]  # (K, n_free) h_c(k)
         mean = (w @ h) / w.sum()
@@ -393,3 +415,48 @@ class FilamentPMFS(OlfactoryEstimator):
             return np.zeros(self.geometry.shape)
         k = self._assign[np.searchsorted(np.flatnonzero(self.geometry.free.ravel()), r * self.geometry.shape[1] + c)]
         return self._sim[k][self._block].reshape(self.geometry.shape)
+
+
+class _ScoreTerms:
+    """The per-cell terms of :meth:`FilamentPMFS._score` for one set of simulations, kept with the inputs (ω/m²,
+    ℓ) they were computed from: a call recomputes only the columns whose inputs changed, gathers the columns of
+    its cells in their order into a (K, N') array of the layout :meth:`FilamentPMFS._score`'s own has and sums
+    it the same way, so that the score has the same bits.
+
+    Parameters
+    ----------
+    est : FilamentPMFS
+        The estimator.
+    sim : (K, n_blocks) ndarray
+        The simulated hit frequencies (kept by reference: the terms are valid for this array only).
+    """
+
+    __slots__ = ("sim", "_est", "_log_sim", "_log_not_sim", "_pos", "_terms", "_x", "_ell")
+
+    def __init__(self, est: FilamentPMFS, sim: np.ndarray):
+        self.sim, self._est = sim, est
+        with np.errstate(divide="ignore"):
+            self._log_sim, self._log_not_sim = np.log(sim), np.log1p(-sim)
+        free = est.geometry.free.ravel()
+        self._pos = np.full(free.size, -1, np.int64)
+        self._pos[free] = np.arange(int(free.sum()))  # column of each free cell
+        self._terms = np.empty((sim.shape[0], int(free.sum())))
+        self._x = np.full(int(free.sum()), np.nan)  # inputs of each column (NaN: not computed)
+        self._ell = np.full(int(free.sum()), np.nan)
+
+    def score(self, cells: np.ndarray, x: np.ndarray, ell: np.ndarray, rows=None) -> np.ndarray:
+        """(K,) the score over ``cells`` (flat) with inputs ``x``, ``ell`` (or (len(rows),) for rows ``rows``)."""
+        col = self._pos[cells]
+        bits = np.uint64
+        stale = ~((self._x[col].view(bits) == x.view(bits)) & (self._ell[col].view(bits) == ell.view(bits)))  # NaN: new
+        if stale.any():
+            c = col[stale]
+            with np.errstate(divide="ignore"):
+                self._terms[:, c] = self._est._score_terms(self.sim, self._log_sim, self._log_not_sim,
+                                                           self._est._block[cells[stale]], x[stale], ell[stale])
+            self._x[c], self._ell[c] = x[stale], ell[stale]
+        # the columns gathered as _score gathers its blocks (sim[:, blocks] of a C-ordered array): the result has
+        # the same memory layout, so numpy's sum over axis 1 adds in the same order (sequentially along a row for
+        # that layout, not pairwise)
+        terms = self._terms if rows is None else self._terms[np.asarray(rows)]
+        return terms[:, col].sum(axis=1)

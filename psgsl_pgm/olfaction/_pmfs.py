@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
 from .._shared._validate import positive, unit_interval
@@ -154,7 +156,9 @@ class PMFSEstimator(OlfactoryEstimator):
         self._conf_used = np.empty(0)
         self._score = np.zeros(n)  # Σ_c log[1 − γ conf_c |ĥ_c − h_c(s)|]
         self._kernels: dict[int, np.ndarray] = {}  # hit-map kernels in the model's wind, per flat cell
+        self._new_rows: OrderedDict[int, _NewCellRows] = OrderedDict()  # h_x(s) and x's factors, cells not compared
         self._kernel_model = self.model
+        self._tables = None  # _RatioTables of the current state (reading_log_ratio)
 
     def _log_factors(self, rows: np.ndarray, h_obs: np.ndarray, conf: np.ndarray) -> np.ndarray:
         """Σ over the given compared cells of log[1 − γ conf_c |ĥ_c − h_c(s)|], for every s."""
@@ -191,9 +195,11 @@ class PMFSEstimator(OlfactoryEstimator):
         self._hitmap = hitmap
         self._score = score
         self._h_used, self._conf_used = h_obs, conf
+        self._tables = None  # the hit map moved: the current factors change
         if new:
             self._slot[flat] = len(self._cells)
             self._cells.append(flat)
+            self._new_rows.pop(flat, None)
 
     def reading_log_ratio(self, positions) -> np.ndarray:
         r"""How one more reading would move the posterior: :math:`\lambda [S'(s) - S(s)]` for a miss and for a hit
@@ -212,8 +218,10 @@ class PMFSEstimator(OlfactoryEstimator):
         loop must expect a reading to do (the policies of :mod:`psgsl_pgm.search`). The kernel is oriented by the
         model's wind at x (the wind the reading will bring is not known before it); the state is not changed.
 
-        Only the compared cells within the kernel's reach change, so the cost is one log per free cell for each of
-        them and for x itself; the kernels are cached per cell until the plume model changes.
+        Only the compared cells within the kernel's reach change, so the cost is two logs (miss, hit) per free
+        cell for each of them and for x itself; their current factors are computed once per state of the
+        estimator and shared by every position (:class:`_RatioTables`), and the kernels and the rows h_x(s) of
+        cells not compared yet are cached per cell until the plume model changes.
 
         Parameters
         ----------
@@ -231,10 +239,28 @@ class PMFSEstimator(OlfactoryEstimator):
         out = np.zeros((len(cells), 2, n))
         hm = self._hitmap
         m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+        gamma, lam = self.discrimination, self.tempering
         compared = np.asarray(self._cells, dtype=np.int64)
         if self._kernel_model is not self.model:
             self._kernels.clear()
+            self._new_rows.clear()
             self._kernel_model = self.model
+        tables = self._ratio_tables(compared)
+        buf = np.empty(n)  # one row of factors at a time (no (m, H·W) temporaries)
+        rows_of = self._new_rows  # least recently asked first
+        missing = list(dict.fromkeys(f for f in cells.tolist() if f not in self._slot and f not in rows_of))
+        for f in cells.tolist():
+            if f in rows_of:
+                rows_of.move_to_end(f)
+        if missing:  # the rows h_x(s) of new cells: their adjoint solves together (the same numbers per column)
+            for f, g_row in zip(missing, self.model.green_rows(missing)):
+                rows_of[f] = _NewCellRows(-np.expm1(-self.model.encounter_scale * g_row))
+        while len(rows_of) > max(2 * len(cells), 64):  # this call's cells and about as many more
+            rows_of.popitem(last=False)
+        # λ [Σ_c log(1 − γ conf'_c |ĥ'_c − h_c(s)|) − Σ_c log(1 − γ conf_c |ĥ_c − h_c(s)|)] over the compared cells
+        # c in x's kernel (and x), each sum accumulated row by row from 0 in slot order, x last: the additions of
+        # numpy's sum over the first axis of the stacked rows (for more than one column; a map of one cell has
+        # at most two rows, which numpy's pairwise sum also adds in order)
         for k, flat in enumerate(cells.tolist()):
             w = self._kernels.get(flat)
             if w is None:
@@ -242,28 +268,44 @@ class PMFSEstimator(OlfactoryEstimator):
                 w = self._kernels[flat] = hm.kernel((r, c), tuple(self.model.wind[r, c]))
             slots = np.flatnonzero(w[compared] > 0) if compared.size else np.zeros(0, np.int64)
             new = flat not in self._slot
+            if not slots.size and not new:
+                continue  # no factor changes: λ (0 − 0) = 0
             at = compared[slots]
             if new:  # x joins the compared cells with its own row h_x(s)
                 at = np.append(at, flat)
-                row_new = -np.expm1(-self.model.encounter_scale * self.model.green_rows([flat])[0])
-                rows = np.concatenate([self._pred[slots], row_new[None]])
-            else:
-                rows = self._pred[slots]
+                x_rows = self._new_rows[flat]
             weight = hm._weight[at]
-            h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
-            conf_old = -np.expm1(-weight / n0)
-            old = np.log1p(-self.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
-            if new:
-                old[-1] = 0.0  # x was not compared before: no factor
-            old = old.sum(axis=0)
             weight_new = weight + w[at]
             conf_new = -np.expm1(-weight_new / n0)
+            old = tables.old_sum(slots, new) if slots.size else None  # Σ of the current factors (0 without any)
+            coef = -gamma * conf_new[: slots.size]  # −γ conf'_c
             for g in (0, 1):
                 h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
-                fac = np.log1p(-self.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
-                out[k, g] = self.tempering * (fac.sum(axis=0) - old)
+                dst = out[k, g]
+                if new and not slots.size:  # x's own factor alone: λ [(0 + x's factor) − 0]
+                    dst += x_rows.factor(g, h_new[-1], conf_new[-1], gamma)
+                    dst -= 0.0
+                    dst *= lam
+                    continue
+                for i, slot in enumerate(slots.tolist()):  # log1p(−γ conf'_c abs(ĥ'_c − h_c(s))), one row at a time
+                    np.subtract(h_new[i], self._pred[slot], out=buf)
+                    np.abs(buf, out=buf)
+                    np.multiply(coef[i], buf, out=buf)
+                    np.log1p(buf, out=buf)
+                    dst += buf
+                if new:
+                    dst += x_rows.factor(g, h_new[-1], conf_new[-1], gamma)
+                dst -= old
+                dst *= lam
         out[:, :, ~self.geometry.free.ravel()] = 0.0
         return out.reshape((len(cells), 2) + self.geometry.shape)
+
+    def _ratio_tables(self, compared: np.ndarray) -> "_RatioTables":
+        """The :class:`_RatioTables` of the current hit map, compared cells and plume model (built once per state)."""
+        t = self._tables
+        if t is None or t.model is not self.model or t.hitmap is not self._hitmap or t.n_compared != compared.size:
+            t = self._tables = _RatioTables(self, compared)
+        return t
 
     @property
     def score(self) -> np.ndarray:
@@ -280,3 +322,76 @@ class PMFSEstimator(OlfactoryEstimator):
     def compared_cells(self) -> np.ndarray:
         """(K, 2) int64 (row, col) of the cells whose hit estimates enter the score."""
         return np.array([divmod(f, self.geometry.shape[1]) for f in self._cells], dtype=np.int64).reshape(-1, 2)
+
+
+class _RatioTables:
+    """What :meth:`PMFSEstimator.reading_log_ratio` shares between candidate positions in one state of the
+    estimator: the current factor of each compared cell c, log[1 − γ conf_c abs(ĥ_c − h_c(s))] for every s. It
+    does not depend on the candidate; its row is computed the first time a candidate's kernel reaches c, with
+    the same floating-point operations per element as a candidate's own rows, and reused.
+
+    Parameters
+    ----------
+    est : PMFSEstimator
+        The estimator, in the state the tables describe.
+    compared : (K,) ndarray of int64
+        Flat indices of its compared cells, in slot order.
+    """
+
+    __slots__ = ("model", "hitmap", "n_compared", "_est", "_compared", "_old", "_done")
+
+    def __init__(self, est: PMFSEstimator, compared: np.ndarray):
+        self.model, self.hitmap, self.n_compared = est.model, est._hitmap, compared.size
+        self._est, self._compared = est, compared
+        self._old = np.empty((compared.size, est.geometry.shape[0] * est.geometry.shape[1]))
+        self._done = np.zeros(compared.size, bool)
+
+    def old_sum(self, slots: np.ndarray, new: bool) -> np.ndarray:
+        """(H·W,) the sum of the current factors of ``slots``, a zero row added last when ``new``: the rows added
+        one by one to 0 in slot order, as numpy sums the stacked rows over their first axis (a new array)."""
+        todo = slots[~self._done[slots]]
+        if todo.size:
+            est, hm = self._est, self.hitmap
+            m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+            at = self._compared[todo]
+            weight = hm._weight[at]
+            h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
+            conf_old = -np.expm1(-weight / n0)
+            rows = est._pred[todo]
+            self._old[todo] = np.log1p(-est.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
+            self._done[todo] = True
+        acc = np.zeros(self._old.shape[1])
+        for s in slots.tolist():
+            acc += self._old[s]
+        if new:
+            acc += 0.0
+        return acc
+
+
+class _NewCellRows:
+    """A cell x not compared yet, for :meth:`PMFSEstimator.reading_log_ratio`: its row h_x(s) and the factor rows
+    log[1 − γ conf_x abs(ĥ_x − h_x(s))] of a miss and of a hit there, kept with the ĥ_x, conf_x (and γ) they
+    were computed for: while the hit map at x does not move, a later state asks for the same numbers (the same
+    operations on the same inputs) and gets them without a log. The estimator keeps these for the cells of its
+    last calls only (least recently asked dropped first).
+
+    Parameters
+    ----------
+    row : (H·W,) ndarray of float64
+        h_x(s) = 1 − exp(−κ G(x | s)).
+    """
+
+    __slots__ = ("row", "_key", "_factor")
+
+    def __init__(self, row: np.ndarray):
+        self.row = row
+        self._key: list = [None, None]  # per outcome g: (ĥ_x, conf_x, γ) of the cached factor
+        self._factor: list = [None, None]
+
+    def factor(self, g: int, h: float, conf: float, discrimination: float) -> np.ndarray:
+        """(H·W,) log[1 − γ conf abs(h − h_x(s))] for outcome ``g`` (cached; do not modify)."""
+        key = (float(h), float(conf), float(discrimination))
+        if self._key[g] != key:
+            self._factor[g] = np.log1p(-discrimination * np.float64(conf) * np.abs(np.float64(h) - self.row))
+            self._key[g] = key
+        return self._factor[g]

@@ -446,18 +446,25 @@ def _reading_factors(sit: Situation, cells):
     return ratio(sit.space.position(cells)).reshape(len(cells), 2, -1)
 
 
-def _expected_entropy_drop(post, p_hit, log_factors) -> np.ndarray:
-    """H(p) − Σ_g P(g) H(q_g), q_g ∝ p L_g, for one candidate; ``p_hit`` = P(hit), ``log_factors`` (2, H·W)."""
-    e_post = entr(post)
-    out = float(e_post.sum())
+def _expected_entropy_drop(post, p_hit, log_factors, *, shared=None) -> np.ndarray:
+    """H(p) − Σ_g P(g) H(q_g), q_g ∝ p L_g, for one candidate; ``p_hit`` = P(hit), ``log_factors`` (2, H·W);
+    ``shared``: :func:`_posterior_parts` of ``post``, when several candidates share it."""
+    e_post, h_post, support = _posterior_parts(post) if shared is None else shared
+    out = h_post
     for g, prob in ((0, 1.0 - p_hit), (1, p_hit)):
         ell = log_factors[g]
-        ell = ell - ell[post > 0].max()  # L_g up to a constant, at most 1 where p > 0
+        ell = ell - ell[support].max()  # L_g up to a constant, at most 1 where p > 0
         lik = np.exp(ell)
         z = float(lik @ post)
         # H(q) = log Z − Σ q log(p L / max L) = log Z + [L·entr(p) − (p ∘ L)·log L] / Z
         out -= prob * (np.log(z) + (lik @ e_post - (post * lik) @ ell) / z)
     return out
+
+
+def _posterior_parts(post):
+    """(entr(p) (H·W,), H(p) = Σ entr(p), the flat indices where p > 0 in order) of the posterior ``post``."""
+    e_post = entr(post)
+    return e_post, float(e_post.sum()), np.flatnonzero(post > 0)
 
 
 def olfactory_gain(sit: Situation, cells) -> np.ndarray:
@@ -487,7 +494,8 @@ def olfactory_gain(sit: Situation, cells) -> np.ndarray:
     post = sit.posterior.ravel()
     if factors is not None:
         p_hit = np.array([r @ post for r in _hit_rows(sit, cells)])
-        return np.array([_expected_entropy_drop(post, ph, f) for ph, f in zip(p_hit, factors)])
+        shared = _posterior_parts(post)
+        return np.array([_expected_entropy_drop(post, ph, f, shared=shared) for ph, f in zip(p_hit, factors)])
     # one (2, H·W) product per candidate, on its cached rows in place (no (K, H·W) copy)
     dots = np.array([b[:2] @ post for b in _hit_blocks(sit, cells)]).reshape(-1, 2)
     p_bar = dots[:, 0]

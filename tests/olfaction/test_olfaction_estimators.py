@@ -300,6 +300,78 @@ def test_pmfs_reading_log_ratio_is_the_update_it_would_make():
         assert np.ptp(ratio[k, 0][~occ]) > 1e-3 and np.ptp(ratio[k, 1][~occ]) > 1e-3  # not a constant
 
 
+def _straight_reading_log_ratio(est, positions):
+    """The PMFS reading ratio computed candidate by candidate on every cell: each compared cell's factors from
+    the hit map, then the ratio, with no row shared between candidates (what the tables of the estimator
+    reproduce)."""
+    cells = est._flat_cells(positions)
+    n = est.geometry.shape[0] * est.geometry.shape[1]
+    out = np.zeros((len(cells), 2, n))
+    hm = est._hitmap
+    m0, p0, n0 = hm.prior_strength, hm.prior_hit, hm.confidence_scale
+    compared = np.asarray(est._cells, dtype=np.int64)
+    for k, flat in enumerate(cells.tolist()):
+        r, c = divmod(flat, est.geometry.shape[1])
+        w = hm.kernel((r, c), tuple(est.model.wind[r, c]))
+        slots = np.flatnonzero(w[compared] > 0) if compared.size else np.zeros(0, np.int64)
+        new = flat not in est._slot
+        at = compared[slots]
+        rows = est._pred[slots]
+        if new:
+            at = np.append(at, flat)
+            row_new = -np.expm1(-est.model.encounter_scale * est.model.green_rows([flat])[0])
+            rows = np.concatenate([rows, row_new[None]])
+        weight = hm._weight[at]
+        h_old = (p0 * m0 + hm._hits[at]) / (m0 + weight)
+        conf_old = -np.expm1(-weight / n0)
+        old = np.log1p(-est.discrimination * conf_old[:, None] * np.abs(h_old[:, None] - rows))
+        if new:
+            old[-1] = 0.0
+        old = old.sum(axis=0)
+        weight_new = weight + w[at]
+        conf_new = -np.expm1(-weight_new / n0)
+        for g in (0, 1):
+            h_new = (p0 * m0 + hm._hits[at] + g * w[at]) / (m0 + weight_new)
+            fac = np.log1p(-est.discrimination * conf_new[:, None] * np.abs(h_new[:, None] - rows))
+            out[k, g] = est.tempering * (fac.sum(axis=0) - old)
+    out[:, :, ~est.geometry.free.ravel()] = 0.0
+    return out.reshape((len(cells), 2) + est.geometry.shape)
+
+
+def test_pmfs_reading_log_ratio_is_the_straight_computation_bit_for_bit():
+    """The ratio the estimator computes with rows shared between candidates and on the free cells only is the
+    candidate-by-candidate computation on every cell, bit for bit (sign of zero included): along a run of
+    readings (compared cells old and new, repeated cells, with and without wind), for candidates asked in
+    several calls per state and after a new plume model."""
+    occ, wind, outlets = _map(21, shape=(14, 18))
+    model = PlumeModel(occ, resolution=H, wind=wind, outlets=outlets, diffusivity=0.03, lifetime=8.0)
+    pos, _, hits, winds = _readings(occ, 14, 22)
+    pos[6] = pos[2]
+    free = np.argwhere(~occ & ~outlets)
+    probe = np.concatenate([pos, (free[::7][:, ::-1] + 0.5) * H])
+    est = PMFSEstimator.from_model(model, discrimination=0.85, tempering=0.6)
+
+    def same(got, ref):
+        assert got.dtype == ref.dtype and got.shape == ref.shape
+        assert got.tobytes() == ref.tobytes()
+
+    checked = 0
+    for i, (p, h, w) in enumerate(zip(pos, hits, winds)):
+        same(est.reading_log_ratio(probe), _straight_reading_log_ratio(est, probe))
+        same(est.reading_log_ratio(probe[::-3]), _straight_reading_log_ratio(est, probe[::-3]))  # same state
+        if i % 4 == 0:  # every free cell: the kept rows of the smaller calls are dropped and made again
+            every = (free[:, ::-1] + 0.5) * H
+            same(est.reading_log_ratio(every), _straight_reading_log_ratio(est, every))
+            assert len(est._new_rows) > 2 * len(probe)
+        est.update(p, h, None if i % 3 == 0 else w)
+        checked += 1
+    moved = PlumeModel(occ, resolution=H, wind=wind[:, ::-1] * 0.5, outlets=outlets, diffusivity=0.03,
+                       lifetime=8.0)
+    est.replace_model(moved)
+    same(est.reading_log_ratio(probe), _straight_reading_log_ratio(est, probe))
+    assert checked == len(pos) and len(est._cells) < len(pos)  # a repeated cell among them
+
+
 def test_pmfs_repeated_misses_at_one_stop_saturate():
     """PMFS does not accumulate readings: after many misses at one stop one more moves the posterior (almost)
     not at all — the factor whose expected effect the closed loop's φ_G must use."""

@@ -97,6 +97,54 @@ def test_pmfs_posterior_concentrates_on_the_source_region_in_a_uniform_wind_corr
     assert abs(est.wind_estimate[6, 20, 0] - 0.4) < 0.05
 
 
+def _straight_score(est, sim, log_odds, omega):
+    """PMFS's score of the rows of ``sim`` computed in one pass on the gathered (K, N') frequencies."""
+    from scipy.special import expit
+
+    x = omega / est.confidence_weight ** 2
+    cells = np.flatnonzero((x > 0) & est.geometry.free.ravel())
+    x = x[cells]
+    log_conf = np.log(-np.expm1(-x))
+    p0 = est.prior_hit
+    ell = (log_odds[cells] + (np.log(p0) - np.log1p(-p0)))[None, :]
+    log_h, log_not_h = -np.logaddexp(0.0, -ell), -np.logaddexp(0.0, ell)
+    h_sim = sim[:, est._block[cells]]
+    with np.errstate(divide="ignore"):
+        log_sim, log_not_sim = np.log(h_sim), np.log1p(-h_sim)
+        log_close = np.where(expit(ell) >= h_sim, np.logaddexp(log_not_h, log_sim), np.logaddexp(log_not_sim, log_h))
+        g = est.discrimination
+        log_g = np.logaddexp(np.log1p(-g), np.log(g) + log_close) if g < 1 else log_close
+    return np.logaddexp(-x[None, :], log_conf[None, :] + log_g).sum(axis=1)
+
+
+def test_pmfs_kept_score_terms_give_the_score_bit_for_bit():
+    """The score with its per-cell terms kept between readings (only the cells whose ω or ℓ moved recomputed) and
+    :meth:`FilamentPMFS._score` are the score computed in one pass, bit for bit, at every reading across
+    refreshes (a new simulation restarts the terms), for every region and for the first-level regions that
+    :meth:`hit_variance` weighs; and two estimators, one asked for its hit variance after every reading, keep the
+    same posterior."""
+    model = _corridor()
+    a = FilamentPMFS(model, seed=4, refresh=4, record_steps=40, warmup_steps=20, discrimination=0.8)
+    b = FilamentPMFS(model, seed=4, refresh=4, record_steps=40, warmup_steps=20, discrimination=0.8)
+    rng = np.random.default_rng(6)
+    terms = set()
+    for x in [(x, y) for x in np.arange(0.25, 3.9, 0.45) for y in (0.35, 0.85)]:
+        wind = (0.4 + 0.05 * rng.normal(), 0.05 * rng.normal())
+        hit = bool(rng.random() < 0.3)
+        a.update(x, hit, wind=wind)
+        b.update(x, hit, wind=wind)
+        fresh = a._score(a._sim, None, a._log_odds, a._omega)
+        assert fresh.tobytes() == _straight_score(a, a._sim, a._log_odds, a._omega).tobytes()
+        assert a._score_kept(a._sim, a._log_odds, a._omega).tobytes() == fresh.tobytes()
+        coarse = np.unique(a._coarse)
+        kept = a._score_kept(a._sim, a._log_odds, a._omega, rows=coarse)
+        assert kept.tobytes() == _straight_score(a, a._sim[coarse], a._log_odds, a._omega).tobytes()
+        a.hit_variance()
+        terms.add(id(a._terms))
+        assert a.posterior.tobytes() == b.posterior.tobytes()
+    assert len(terms) >= 3  # the simulations were refreshed, and the kept terms with them
+
+
 def test_pmfs_hit_map_confidence_and_score_by_hand():
     """One hit then one miss at one cell: ĥ there is σ(logit 0.6 + logit 0.05 − logit 0.1), its confidence
     1 − exp(−2 / 0.25), and the posterior is exp Σ_c log[1 − conf_c |ĥ_c − h_c(k)|] over the region's maps."""

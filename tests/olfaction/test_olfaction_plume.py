@@ -125,6 +125,22 @@ def test_the_factorisation_is_made_on_first_use_and_kept():
     np.testing.assert_array_equal(g, fresh.green_rows([np.flatnonzero(~occ.ravel() & ~outlets.ravel())[0]]))
 
 
+def test_a_green_row_is_the_same_bits_solved_alone_or_with_others():
+    """A row G(x | ·) does not depend on which other sensor cells share its solve (one chunk, several chunks or
+    alone) nor on the cache: what lets an estimator solve its rows together and keep them (the PMFS reading
+    ratio)."""
+    occ, wind, outlets = _random_map(np.random.default_rng(8), shape=(30, 41))
+    cells = np.flatnonzero(~occ.ravel() & ~outlets.ravel())[::3]
+    assert cells.size > 64  # more than one chunk of right-hand sides
+    together = PlumeModel(occ, resolution=0.1, wind=wind, outlets=outlets, cache_size=0).green_rows(cells)
+    alone_model = PlumeModel(occ, resolution=0.1, wind=wind, outlets=outlets, cache_size=0)
+    alone = np.stack([alone_model.green_rows([c])[0] for c in cells])
+    assert together.tobytes() == alone.tobytes()
+    cached = PlumeModel(occ, resolution=0.1, wind=wind, outlets=outlets)
+    cached.green_rows(cells[::5])
+    assert cached.green_rows(cells[::-1]).tobytes() == together[::-1].tobytes()
+
+
 def test_adding_absorbing_outlets_lowers_every_green_value():
     rng = np.random.default_rng(5)
     occ, wind, _ = _random_map(rng, shape=(12, 12))
