@@ -249,3 +249,41 @@ def test_quiet_distributed_holds_back_warnings_during_the_block_and_restores_eve
         top.removeHandler(handler)
         top.setLevel(top_level)
         own.setLevel(own_level)
+
+
+def _blas_threads(x):
+    """The threads of every BLAS/OpenMP library loaded in the process running the job, and its pid."""
+    from threadpoolctl import threadpool_info
+
+    return {"x": x, "threads": sorted({int(d["num_threads"]) for d in threadpool_info()}), "pid": os.getpid()}
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_every_run_computes_with_one_blas_thread_in_or_out_of_this_process(tmp_path, workers):
+    """A threaded BLAS splits its sums differently (other last bits) and spins two threads on small sums: the
+    runs of ``workers=1`` (here, in this process) get the one thread the pool's workers get."""
+    pytest.importorskip("threadpoolctl")
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    with threadpool_limits(limits=2):  # this process as a user's shell leaves it: every core
+        before = sorted({int(d["num_threads"]) for d in threadpool_info()})
+        run_grid(_jobs(tmp_path, _blas_threads, n=2), write=_write, workers=workers)
+        after = sorted({int(d["num_threads"]) for d in threadpool_info()})
+    results = [_read(tmp_path / f"r{x}.json") for x in range(2)]
+    assert all(r["threads"] == [1] for r in results), results
+    assert after == before  # the limit is lifted after the runs
+    assert (results[0]["pid"] == os.getpid()) == (workers == 1)
+
+
+def test_without_threadpoolctl_a_single_worker_runs_in_a_fresh_process(monkeypatch):
+    """One BLAS thread can only be set before the BLAS loads without threadpoolctl: in a new process."""
+    import sys
+
+    from psgsl_pgm.runs import _runner
+
+    monkeypatch.setitem(sys.modules, "threadpoolctl", None)  # import threadpoolctl -> ImportError
+    backend = _runner._backend(None, 1, 3)
+    try:
+        assert isinstance(backend, _runner._Pool) and backend.slots() == 1
+    finally:
+        backend.close()
