@@ -7,7 +7,8 @@ grouped by (policy, estimator, variant) and, with ``--by source``, by the source
 and floor point), with ``--by house`` by the generated home. Per group: correct declarations of runs; RMST(τ) of the time to a correct declaration with
 Greenwood's 95 % interval (:func:`psgsl_pgm.search._survival.rmst`); wrong declarations of those made; the median
 error of the declarations made, m; and the CPU per stop, s (the process time the benchmark measures for a whole
-run, the simulated world included, over the run's stops; the search command does not record CPU: "—").
+run, the simulated world included, over the run's stops; "—" for runs stored before the search command recorded
+it).
 """
 
 import argparse
