@@ -370,12 +370,25 @@ def write_replay(result: ReplayResult, out) -> list:
 
     Examples
     --------
-    With a bag recorded on the robot (``psgsl replay BAG --out DIR`` does the same):
+    A 4-reading episode in the default house's hallway, replayed and written (``psgsl replay BAG --out DIR`` does
+    the same with a bag recorded on the robot):
 
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
     >>> from psgsl_pgm.experiment import replay, write_replay
-    >>> files = write_replay(replay("robot.bag", world="house.yaml"), "replay-out")   # doctest: +SKIP
-    >>> [f.name for f in files][:2]                                                    # doctest: +SKIP
-    ['run.npz', 'metrics.csv']
+    >>> from psgsl_pgm.ros import Episode, write_bag
+    >>> from psgsl_pgm.sim import default_house
+    >>> t = np.arange(4.0)
+    >>> pose = np.stack([1.0 + 0.5 * t, np.full(4, 6.0), np.zeros(4)], axis=-1)
+    >>> episode = Episode(grid=default_house(0).grid, pose_t=t, pose=pose, gas_t=t, gas=[2.0, 0.5, 2.0, 0.5],
+    ...                   wind_t=t, wind=np.tile([0.2, 0.0], (4, 1)), frame_t=[], frame_cells=[], frame_labels=[])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     result = replay(write_bag(Path(folder) / "hall.bag", episode), source="oven")
+    ...     files = write_replay(result, Path(folder) / "replay-out")
+    ...     names = sorted(f.name for f in files if f.exists())
+    >>> names[:3], len(names)
+    (['error-chart.png', 'metrics.csv', 'posterior-olfaction.npy'], 8)
     """
     from ..io._output import write_file_atomically
     from ._figures import plot_error_chart
