@@ -431,12 +431,18 @@ class _InProcess:
     """``workers=1`` without a scheduler: run each job here (first Ctrl-C lets the current run finish), with BLAS
     and OpenMP held to one thread as in a worker (:data:`WORKER_ENVIRON`): a threaded BLAS splits its sums
     differently, so a run would not be the one a worker computes, and its two threads spinning on sums of ~10⁴
-    numbers cost several times the CPU. The limit needs threadpoolctl (this process's BLAS is loaded already, so
-    the environment variables come too late); without it :func:`_backend` runs the job in a one-process pool.
+    numbers cost several times the CPU. The limit needs threadpoolctl (the ``sim`` extra; this process's BLAS is
+    loaded already, so environment variables come too late): without it the jobs run on the process's BLAS threads
+    as they are, and a run may differ in its last bits from a worker's.
     """
 
-    def __init__(self, limits):
-        self._limits = limits  # threadpoolctl.threadpool_limits
+    def __init__(self):
+        try:
+            from threadpoolctl import threadpool_limits
+        except ImportError:
+            self._limits = None
+        else:
+            self._limits = threadpool_limits
 
     def slots(self):
         return 1
@@ -448,6 +454,8 @@ class _InProcess:
         return list(handles)  # "done" when asked: the run happens in result()
 
     def result(self, job):
+        if self._limits is None:
+            return job.fn(*job.args, **job.kwargs)
         with self._limits(limits=1):
             return job.fn(*job.args, **job.kwargs)
 
@@ -653,13 +661,7 @@ def _quiet_distributed(level: int = logging.ERROR):
 def _backend(scheduler, workers, n_jobs):
     if scheduler is None:
         n = min(workers, n_jobs)
-        if n > 1:
-            return _Pool(n)
-        try:
-            from threadpoolctl import threadpool_limits
-        except ImportError:  # one thread can only be set before the BLAS loads: in a fresh worker process
-            return _Pool(1)
-        return _InProcess(threadpool_limits)
+        return _Pool(n) if n > 1 else _InProcess()
     if not isinstance(scheduler, str) or not scheduler.strip():
         raise ValueError(f"scheduler must be 'local' or a dask scheduler address such as 'tcp://127.0.0.1:8786', "
                          f"got {scheduler!r}")

@@ -68,6 +68,8 @@ def test_estimate_on_house_b_at_one_centimetre_stays_under_2_gb(tmp_path):
     """The lab's 1-cm map, furniture boxes up to 1.8 m: 180 layers, a dense voxel map of ~11 GiB, never built."""
     import json
 
+    pytest.importorskip("PIL", reason="the map's PGM image is read with Pillow (the sim extra)")
+
     from psgsl_pgm.sim import load_ros_map
 
     fine = load_ros_map(HOUSE_B / "_occupancy.yaml")

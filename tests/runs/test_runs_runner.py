@@ -275,15 +275,12 @@ def test_every_run_computes_with_one_blas_thread_in_or_out_of_this_process(tmp_p
     assert (results[0]["pid"] == os.getpid()) == (workers == 1)
 
 
-def test_without_threadpoolctl_a_single_worker_runs_in_a_fresh_process(monkeypatch):
-    """One BLAS thread can only be set before the BLAS loads without threadpoolctl: in a new process."""
+def test_without_threadpoolctl_a_single_worker_runs_here_on_the_process_s_blas(monkeypatch, tmp_path):
+    """threadpoolctl (the sim extra) is what holds this process's loaded BLAS to one thread; without it the runs
+    still happen here, as the Ctrl-C contract of ``workers=1`` says, on the BLAS threads the process has."""
     import sys
 
-    from psgsl_pgm.runs import _runner
-
     monkeypatch.setitem(sys.modules, "threadpoolctl", None)  # import threadpoolctl -> ImportError
-    backend = _runner._backend(None, 1, 3)
-    try:
-        assert isinstance(backend, _runner._Pool) and backend.slots() == 1
-    finally:
-        backend.close()
+    report = run_grid(_jobs(tmp_path, n=2), write=_write, workers=1)
+    assert {_read(tmp_path / f"r{x}.json")["pid"] for x in range(2)} == {os.getpid()}
+    assert report
