@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from profile_benchmark_run import machine  # noqa: E402
+from profile_benchmark_run import machine, one_blas_thread  # noqa: E402
 
 
 def run_digest(run) -> str:
@@ -51,12 +51,7 @@ def main(argv=None):
                     "(the embedded house: three quarters of it)")
     ap.add_argument("--repeats", type=int, default=3)
     a = ap.parse_args(argv)
-    try:
-        from threadpoolctl import threadpool_limits
-
-        threadpool_limits(limits=1, user_api="blas")
-    except ImportError:
-        pass
+    one_blas_thread()
     print(machine())
     from psgsl_pgm.experiment import ExperimentConfig
     from psgsl_pgm.runs._key import digest, world_key

@@ -69,6 +69,15 @@ PARTS = (
 )
 
 
+def one_blas_thread() -> None:
+    """Hold the BLAS to one thread in this process, as in the grid's workers (threadpoolctl; nothing without it)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return
+    threadpool_limits(limits=1, user_api="blas")
+
+
 def machine() -> str:
     """The CPU's model name (lscpu) and the BLAS libraries with their kernels (threadpoolctl)."""
     cpu = platform.processor() or platform.machine()
@@ -140,12 +149,7 @@ def main(argv=None):
     ap.add_argument("--pstats", default=None, help="write the runs' profile here (pstats format)")
     ap.add_argument("--no-compile", action="store_true")
     a = ap.parse_args(argv)
-    try:
-        from threadpoolctl import threadpool_limits
-
-        threadpool_limits(limits=1, user_api="blas")
-    except ImportError:
-        pass
+    one_blas_thread()
     print(machine())
     from dataclasses import replace
 

@@ -170,6 +170,10 @@ def test_a_several_source_benchmark_reports_per_source_and_all_found(tmp_path):
     assert arm["n"] == 2 and arm["sources"] == sum(e["n_sources"] for e in episodes.values())
     assert 0.0 <= arm["source_success"]["value"] <= 1.0 and arm["all_found_rmst"]["tau"] == 120.0
     assert "Several sources per episode" in (out / "report.md").read_text()
+    from psgsl_pgm.search import load_search_run  # a run's CPU seconds, once, under its benchmark label
+
+    configs = [load_search_run(p).config for p in sorted((out / "runs").iterdir())]
+    assert all("cpu_seconds" not in c and c["benchmark"]["cpu_seconds"] > 0 for c in configs)
     with pytest.raises(ValueError, match="sources_per_episode"):
         run_benchmark(out=tmp_path / "c", houses=1, seeds=1, sources_per_episode=4)
 
