@@ -422,6 +422,16 @@ def _olfactory_bound(sit: Situation, cells) -> np.ndarray:
     return np.maximum(entr(p) + entr(1.0 - p) - h_low, 0.0) + 1e-9
 
 
+def _signal_bound(sit: Situation, cells):
+    """(K,) an upper bound of the computed φ_G of each candidate cell that needs no row of the plume operator's
+    inverse (:meth:`~psgsl_pgm.olfaction.GridInfotaxis.information_gain_bound`: one forward solve for every cell
+    at once), or None when the estimator offers none."""
+    bound_of = getattr(sit.beliefs.estimator, "information_gain_bound", None)
+    if bound_of is None:
+        return None
+    return bound_of(sit.posterior).ravel()[np.asarray(cells)]
+
+
 def _distances_past(sit: Situation, cell: int) -> np.ndarray:
     """(H·W,) max(d(cell, s) − r, 0), the geodesic distance from ``cell`` past the found radius r, 0 where
     unreachable (no mass there), cached for the run (the distances of space-aware infotaxis's value)."""
@@ -552,7 +562,7 @@ def _infotaxis_formula(p_f, h, phi_g, phi_o):
 _CHUNK = 8  # candidates evaluated together by _branch_and_bound
 
 
-def _branch_and_bound(bound, evaluate, n_headings: int, *, chunk: int = _CHUNK):
+def _branch_and_bound(bound, evaluate, n_headings: int, *, chunk: int = _CHUNK, refine=None):
     """The first maximum of every candidate pose's score, evaluating only the candidates whose bound can win.
 
     The candidates are evaluated in chunks of ``chunk``, from the highest bound down (equal bounds in candidate
@@ -575,6 +585,10 @@ def _branch_and_bound(bound, evaluate, n_headings: int, *, chunk: int = _CHUNK):
         The number of headings (columns of the score).
     chunk : int
         Candidates evaluated together.
+    refine : callable, optional
+        ``refine(k)`` → (len(k),) a second upper bound of the candidates ``k`` (dearer than ``bound``: asked only
+        for the candidates whose ``bound`` can still win); those whose second bound is below the best score are
+        skipped too. A NaN second bound is taken as +inf (the candidate is evaluated).
 
     Returns
     -------
@@ -591,6 +605,11 @@ def _branch_and_bound(bound, evaluate, n_headings: int, *, chunk: int = _CHUNK):
         k = k[bound[k] >= best]
         if k.size == 0:
             break
+        if refine is not None:
+            second = np.asarray(refine(k), dtype=np.float64)
+            k = k[~(second < best)]  # NaN: evaluated
+            if k.size == 0:
+                continue
         score[k] = evaluate(k)
         best = max(best, float(score[k].max()))
     return _first_max(score), score
@@ -599,10 +618,13 @@ def _branch_and_bound(bound, evaluate, n_headings: int, *, chunk: int = _CHUNK):
 def _choose_infotaxis(sit: Situation) -> Decision:
     """The infotaxis decision, the best-scoring pose of :func:`infotaxis_gain`, by branch and bound.
 
-    Every candidate's score has an upper bound: G ≤ P_f H + (1 − P_f)(B_G + B_O), with B_G ≥ φ_G
-    (:func:`_olfactory_bound`) and B_O ≥ φ_O at every heading (:meth:`FreeSpace.view_bound`), through the same
-    monotone floating-point operations and the same scoring rule as the score itself (so it bounds the *computed*
-    score); when a bound is not finite or some P_f > 1 (so 1 − P_f < 0), every candidate is evaluated. The
+    Every candidate's score has an upper bound: G ≤ P_f H + (1 − P_f)(B_G + B_O), with B_G ≥ φ_G and B_O ≥ φ_O
+    at every heading (:meth:`FreeSpace.view_bound`), through the same monotone floating-point operations and the
+    same scoring rule as the score itself (so it bounds the *computed* score); where P_f exceeds 1 by rounding
+    (1 − P_f < 0) the bound is P_f H, the score with φ_G = φ_O = 0; when a bound is not finite, every candidate is
+    evaluated. B_G is first the bound that needs no row of the plume operator's inverse (:func:`_signal_bound`,
+    one forward solve for all candidates), and for the candidates that can still win the smaller of it and the
+    per-tile bound of their rows (:func:`_olfactory_bound`): the rows are solved only for those. The
     candidates are evaluated exactly — φ_G and φ_O, each candidate's own products, the very numbers of
     :func:`infotaxis_gain` — from the highest bound down, until the next bound is below the best score found
     (:func:`_branch_and_bound`); the others cannot win. The winner is the first maximum in lattice order, the
@@ -615,15 +637,28 @@ def _choose_infotaxis(sit: Situation) -> Decision:
     h = float(entr(sit.posterior).sum())
     gain = _semantic_gain(sit)
     b_o = np.zeros(len(cells)) if gain is None else sit.space.view_bound(gain, cells)
-    bound = _score(sit, _infotaxis_formula(p_f, h, _olfactory_bound(sit, cells), b_o[:, None]), tau).max(axis=1)
-    if not (np.isfinite(bound).all() and (p_f <= 1.0).all()):  # (1 − P_f) < 0 or no bound: evaluate every one
-        bound = np.full(len(cells), np.inf)
+    over = p_f > 1.0  # 1 − P_f < 0 (P_f one rounding above 1): the score is largest with φ_G = φ_O = 0
+    b_o = np.where(over, 0.0, b_o)
+
+    def bound_of(b_g, k=slice(None)):  # the score's bound through the score's own operations
+        b_g = np.where(over[k], 0.0, b_g)
+        return _score(sit, _infotaxis_formula(p_f[k], h, b_g, b_o[k, None]), tau[k]).max(axis=1)
+
+    b_signal = _signal_bound(sit, cells)  # no row needed: the rows are solved only for the candidates it keeps
+    refine = None
+    if b_signal is None:
+        bound = bound_of(_olfactory_bound(sit, cells))
+    else:
+        bound = bound_of(b_signal)
+        refine = lambda k: bound_of(np.minimum(b_signal[k], _olfactory_bound(sit, cells[k])), k)  # noqa: E731
+    if not np.isfinite(bound).all():  # no bound: evaluate every one
+        bound, refine = np.full(len(cells), np.inf), None
 
     def evaluate(k):
         phi_o = _view_information(sit, cells[k], gain)
         return _score(sit, _infotaxis_formula(p_f[k], h, olfactory_gain(sit, cells[k]), phi_o), tau[k])
 
-    flat, score = _branch_and_bound(bound, evaluate, tau.shape[1])
+    flat, score = _branch_and_bound(bound, evaluate, tau.shape[1], refine=refine)
     return _best(score, cells, pred, drive, sit, flat=flat)
 
 

@@ -95,6 +95,31 @@ def test_adjoint_rows_equal_forward_solutions_and_dense_inverse(boundary):
     assert g12 == pytest.approx(f21, rel=1e-10, abs=1e-300)
 
 
+def test_mean_concentration_is_the_posterior_average_of_the_green_rows_and_the_dense_inverse():
+    rng = np.random.default_rng(12)
+    occ, wind, outlets = _random_map(rng, shape=(10, 13))
+    h = 0.25
+    m = PlumeModel(occ, resolution=h, wind=wind, outlets=outlets, diffusivity=0.04, lifetime=9.0)
+    p = rng.random(occ.shape) ** 4  # uneven, with mass on walls and outlets too (they emit nothing)
+    p /= p.sum()
+    got = m.mean_concentration(p)
+    idx = m.active_index
+    inv = np.linalg.inv(m.operator.toarray())
+    expect = np.zeros(occ.shape)
+    expect[idx >= 0] = inv[idx[idx >= 0]][:, idx[idx >= 0]] @ p[idx >= 0] / h**2  # Σ_s p(s) (A⁻¹)_{xs} / h²
+    np.testing.assert_allclose(got, expect, rtol=1e-10, atol=1e-14 * expect.max())
+    free = np.flatnonzero(~occ.ravel())
+    rows = m.green_rows(free)  # Σ_s p(s) G(x | s), row by row
+    np.testing.assert_allclose(got.ravel()[free], rows @ p.ravel(), rtol=1e-10, atol=1e-14 * expect.max())
+    assert (got[occ | outlets] == 0).all()
+    with pytest.raises(ValueError, match="map's shape"):
+        m.mean_concentration(p[:, :-1])
+    with pytest.raises(ValueError, match="finite and non-negative"):
+        m.mean_concentration(np.where(occ, -1.0, p))
+    with pytest.raises(ValueError, match="finite and non-negative"):
+        m.mean_concentration(np.full(occ.shape, np.nan))
+
+
 def test_green_is_zero_on_walls_outlets_and_across_sealed_walls():
     occ = np.zeros((8, 15), bool)
     occ[:, 7] = True  # sealed wall: two disconnected rooms

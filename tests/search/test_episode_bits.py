@@ -91,7 +91,9 @@ def test_branch_and_bound_picks_the_exhaustive_arg_max_along_an_episode(monkeypa
                               sit)
         assert (dec.cell, dec.headings, dec.drive, dec.score) == (ref.cell, ref.headings, ref.drive, ref.score)
         np.testing.assert_array_equal(dec.path, ref.path)
-        assert (_policies._olfactory_bound(sit, cells) >= _policies.olfactory_gain(sit, cells)).all()
+        gain_g = _policies.olfactory_gain(sit, cells)
+        assert (_policies._olfactory_bound(sit, cells) >= gain_g).all()
+        assert (_policies._signal_bound(sit, cells) >= gain_g).all()  # the bound of no row
         gain = _policies._semantic_gain(sit)
         if gain is not None:
             assert (sit.space.view_bound(gain, cells)[:, None] >= sit.space.view_gain(gain, cells)).all()
