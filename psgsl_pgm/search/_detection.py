@@ -202,7 +202,11 @@ class DetectionModel:
         j = int(self.owner[c])
         if j >= 0:  # the footprint's own points: the same comparisons as near_footprints()[:, j]
             fp = self._fp_points[self._fp_starts[j] : self._fp_starts[j] + self._sizes[j]]
-            return _near_any(p, fp, self.found_radius**2)
+            b = self._fp_boxes[j]  # only the points in its widened box can be within r
+            k = np.flatnonzero((p[:, 0] >= b[0]) & (p[:, 0] <= b[2]) & (p[:, 1] >= b[1]) & (p[:, 1] <= b[3]))
+            out = np.zeros(len(p), dtype=bool)
+            out[k] = _near_any(p[k], fp, self.found_radius**2)
+            return out
         return _d2(p, self.centres[c][None, :]) <= self.found_radius**2
 
     def _pairs(self, points):

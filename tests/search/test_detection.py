@@ -251,6 +251,26 @@ def test_found_rule_memory_is_bounded_by_blocks_not_by_cells_times_footprint(mon
     np.testing.assert_array_equal(model.found(x, oven), d <= 0.5)
 
 
+def test_found_is_the_brute_force_rule_for_points_in_and_out_of_the_footprints_box():
+    """The points outside a footprint's box widened by r are never compared with its cells: the answers are those
+    of every point against every cell, also at exactly r from the nearest centre."""
+    from psgsl_pgm import GridMap
+
+    grid = GridMap(np.zeros((40, 50), dtype=bool), 0.1)
+    footprint = np.zeros(grid.shape, dtype=bool)
+    footprint[10:14, 20:27] = True
+    r = 0.5
+    model = DetectionModel(grid, r, footprints=[footprint])
+    centres = grid.cell_centres().reshape(-1, 2)[footprint.ravel()]
+    rng = np.random.default_rng(3)
+    pts = np.concatenate([rng.uniform(0.0, 5.0, (4000, 2)),
+                          centres[:5] + [[r, 0.0], [0.0, -r], [-r, 0.0], [0.0, r], [r * 0.6, r * 0.8]]])
+    d2 = ((pts[:, None] - centres[None]) ** 2).sum(-1).min(axis=1)
+    got = model.found(pts, int(np.flatnonzero(footprint.ravel())[3]))
+    np.testing.assert_array_equal(got, d2 <= r**2)
+    assert 50 < got.sum() < 3000
+
+
 def test_rows_in_blocks_equal_rows_at_once(monkeypatch, house):
     from psgsl_pgm.search import _detection
 
