@@ -352,6 +352,22 @@ def make_wind(
             raise ValueError(f"{name} must be a positive number, got {v!r}")
     if not (np.isfinite(perturbation) and perturbation >= 0):
         raise ValueError(f"perturbation must be a non-negative fraction of mean_speed, got {perturbation!r}")
+    key = content_digest(grid.occupancy, np.asarray(inlet), np.asarray(outlet), float(grid.resolution),
+                         tuple(np.asarray(grid.origin, dtype=np.float64).tolist()), float(mean_speed),
+                         float(perturbation), float(correlation_length), float(correlation_time), float(period),
+                         float(duration), int(seed))
+    return _WIND_SEQUENCES.get(key, lambda: _make_wind(grid, inlet, outlet, mean_speed, perturbation,
+                                                      correlation_length, correlation_time, period, duration, seed))
+
+
+#: The last wind sequences made (immutable): every arm and condition of an episode runs in the same seeded wind,
+#: and a grid's worker takes an episode's runs one after another.
+_WIND_SEQUENCES = ContentCache(maxsize=2)
+
+
+def _make_wind(grid, inlet, outlet, mean_speed, perturbation, correlation_length, correlation_time, period, duration,
+               seed) -> WindSequence:
+    """:func:`make_wind` on checked arguments."""
     base = potential_flow(grid, inlet, outlet, mean_speed=mean_speed)
     n = max(1, int(np.ceil(duration / period)))
     if perturbation == 0:

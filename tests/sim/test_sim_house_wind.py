@@ -204,8 +204,17 @@ def test_potential_flow_errors():
 def test_perturbed_wind_sequence(house):
     h = house
     g = h.grid
+    from psgsl_pgm.sim import _wind
+
     seq = make_wind(g, h.inlet, h.outlet, mean_speed=0.2, perturbation=0.3, period=10.0, duration=100.0, seed=5)
+    # kept for the next run of the episode (immutable); made again without the cache, the same numbers
+    assert make_wind(g, h.inlet, h.outlet, mean_speed=0.2, perturbation=0.3, period=10.0, duration=100.0,
+                     seed=5) is seq
+    _wind._WIND_SEQUENCES.clear()
     again = make_wind(g, h.inlet, h.outlet, mean_speed=0.2, perturbation=0.3, period=10.0, duration=100.0, seed=5)
+    assert again is not seq
+    other = make_wind(g, h.inlet, h.outlet, mean_speed=0.2, perturbation=0.3, period=10.0, duration=100.0, seed=6)
+    assert not np.array_equal(other.velocities, seq.velocities)
     base = potential_flow(g, h.inlet, h.outlet, mean_speed=0.2)
     assert len(seq.snapshots) == 10
     np.testing.assert_array_equal(seq.velocities, again.velocities)
