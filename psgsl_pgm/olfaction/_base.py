@@ -398,6 +398,15 @@ class OlfactoryEstimator(abc.ABC):
         """
         return self._hit_likelihood_rows(self._flat_cells(positions)).reshape((-1,) + self.geometry.shape)
 
+    def _distribution(self, posterior) -> np.ndarray:
+        """``posterior`` as an (H, W) float64 distribution over the map's cells; ValueError otherwise."""
+        post = np.asarray(posterior, dtype=np.float64)
+        if post.shape != self.geometry.shape:
+            raise ValueError(f"posterior must have the map's shape {self.geometry.shape}, got {post.shape}")
+        if not (np.isfinite(post).all() and (post >= 0).all() and abs(post.sum() - 1.0) < 1e-9):
+            raise ValueError("posterior must be a distribution over the map's cells (finite, >= 0, sums to 1)")
+        return post
+
     def information_gain(self, positions, *, posterior=None) -> np.ndarray:
         r"""Expected information about S from one hit/miss reading at each candidate position,
         :math:`I(S; \text{hit}_x)`.
@@ -423,15 +432,7 @@ class OlfactoryEstimator(abc.ABC):
             Non-negative, at most ln 2.
         """
         flat = self._flat_cells(positions)
-        if posterior is None:
-            post = self._post
-        else:
-            post = np.asarray(posterior, dtype=np.float64)
-            if post.shape != self.geometry.shape:
-                raise ValueError(f"posterior must have the map's shape {self.geometry.shape}, got {post.shape}")
-            if not (np.isfinite(post).all() and (post >= 0).all() and abs(post.sum() - 1.0) < 1e-9):
-                raise ValueError("posterior must be a distribution over the map's cells (finite, >= 0, sums to 1)")
-            post = post.ravel()
+        post = self._post if posterior is None else self._distribution(posterior).ravel()
         p_hit = self._hit_likelihood_rows(flat)  # (n, H*W)
         p_bar = p_hit @ post  # predictive P(hit at x)
         h_bin = entr(p_hit) + entr(1.0 - p_hit)  # H_b(P_x(s))

@@ -348,7 +348,7 @@ class GridInfotaxis(OlfactoryEstimator):
         Raises
         ------
         ValueError
-            If ``posterior`` is not (H, W), or holds a negative or non-finite value.
+            If ``posterior`` is not (H, W), or not a distribution (finite, non-negative, summing to 1).
 
         Examples
         --------
@@ -361,7 +361,7 @@ class GridInfotaxis(OlfactoryEstimator):
         """
         if self._components_of is not self.model:
             self._build_components()
-        post = np.asarray(posterior, dtype=np.float64)
+        post = self._distribution(posterior)  # Jensen and the chord need Σ p = 1
         c = np.stack([m.mean_concentration(post).ravel() for m in self._models])[self._component_model]  # c̄_j
         u = np.exp(self._log_weights) @ -np.expm1(-self._kappa[:, None] * c)  # Σ_j π_j (1 − e^{−κ_j c̄_j})
         u *= (1.0 - self.missed_hit_rate) * (1.0 + 1e-6)  # U ≥ r̄

@@ -268,12 +268,17 @@ class PlumeModel:
             cell is an outlet).
         """
         r, c = self.cell_of(source, "source")
-        out = np.zeros(self.shape[0] * self.shape[1])
+        rhs = np.zeros(self._A.shape[0])
         j = self._index[r, c]
         if j >= 0:
-            rhs = np.zeros(self._A.shape[0])
-            rhs[j] = 1.0
-            out[self._active_flat] = self._solve(rhs, "N") / self.geometry.resolution**2  # c = A⁻¹ e_s / h²
+            rhs[j] = 1.0  # e_s; an outlet source emits nothing
+        return self._field(rhs)
+
+    def _field(self, rhs: np.ndarray) -> np.ndarray:
+        """(H, W) c = A⁻¹ q / h² of the emission q over the active cells (zero elsewhere), one forward solve."""
+        out = np.zeros(self.shape[0] * self.shape[1])
+        if rhs.any():
+            out[self._active_flat] = self._solve(rhs, "N") / self.geometry.resolution**2  # c = A⁻¹ q / h²
         return out.reshape(self.shape)
 
     def mean_concentration(self, source_probs) -> np.ndarray:
@@ -313,11 +318,7 @@ class PlumeModel:
             raise ValueError(f"source_probs must have the map's shape {self.shape}, got {w.shape}")
         if not (np.isfinite(w).all() and (w >= 0).all()):
             raise ValueError("source_probs must be finite and non-negative")
-        out = np.zeros(self.shape[0] * self.shape[1])
-        if self._A.shape[0]:
-            rhs = w.ravel()[self._active_flat]
-            out[self._active_flat] = self._solve(rhs, "N") / self.geometry.resolution**2  # c̄ = A⁻¹ p / h²
-        return out.reshape(self.shape)
+        return self._field(w.ravel()[self._active_flat])  # c̄ = A⁻¹ p / h²
 
     def hit_probability(self, position) -> np.ndarray:
         """P(hit at ``position`` | s) = 1 − exp(−κ G(x | s)) for every candidate source s, shape (H, W)."""

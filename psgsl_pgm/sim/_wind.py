@@ -167,10 +167,14 @@ def potential_flow(grid: GridMap, inlet, outlet, *, mean_speed: float = 0.2) -> 
         raise ValueError("inlet and outlet cells must be disjoint")
     if not (np.isfinite(mean_speed) and mean_speed > 0):
         raise ValueError(f"mean_speed must be a positive number in m/s, got {mean_speed!r}")
-    key = content_digest(grid.occupancy, inlet, outlet, float(grid.resolution),
-                         tuple(np.asarray(grid.origin, dtype=np.float64).tolist()))
-    field, current = _UNSCALED_FLOWS.get(key, lambda: _unscaled_flow(grid, inlet, outlet))
+    field, current = _UNSCALED_FLOWS.get(_map_key(grid, inlet, outlet), lambda: _unscaled_flow(grid, inlet, outlet))
     return field.scaled(mean_speed / current)
+
+
+def _map_key(grid: GridMap, inlet, outlet, *extra) -> str:
+    """The content key of a map and its windows (and ``extra`` plain values) for this module's caches."""
+    return content_digest(grid.occupancy, np.asarray(inlet), np.asarray(outlet), float(grid.resolution),
+                          tuple(np.asarray(grid.origin, dtype=np.float64).tolist()), *extra)
 
 
 #: The unscaled potential flow of each house's map and windows (one sparse solve), shared by every run of the
@@ -352,10 +356,8 @@ def make_wind(
             raise ValueError(f"{name} must be a positive number, got {v!r}")
     if not (np.isfinite(perturbation) and perturbation >= 0):
         raise ValueError(f"perturbation must be a non-negative fraction of mean_speed, got {perturbation!r}")
-    key = content_digest(grid.occupancy, np.asarray(inlet), np.asarray(outlet), float(grid.resolution),
-                         tuple(np.asarray(grid.origin, dtype=np.float64).tolist()), float(mean_speed),
-                         float(perturbation), float(correlation_length), float(correlation_time), float(period),
-                         float(duration), int(seed))
+    key = _map_key(grid, inlet, outlet, float(mean_speed), float(perturbation), float(correlation_length),
+                   float(correlation_time), float(period), float(duration), int(seed))
     return _WIND_SEQUENCES.get(key, lambda: _make_wind(grid, inlet, outlet, mean_speed, perturbation,
                                                       correlation_length, correlation_time, period, duration, seed))
 

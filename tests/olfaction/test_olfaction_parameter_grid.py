@@ -186,3 +186,5 @@ def test_the_information_gain_bound_needs_no_row_and_bounds_every_cell(eps, delt
         assert bound[6:10, :2].max() < 0.01 * np.log(2)
     with pytest.raises(ValueError, match="map's shape"):
         est.information_gain_bound(east[:, :-1])
+    with pytest.raises(ValueError, match="sums to 1"):  # Jensen and the chord hold for a distribution only
+        est.information_gain_bound(2.0 * east)
